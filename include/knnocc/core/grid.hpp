@@ -1,0 +1,101 @@
+#pragma once
+// Grid: resolution plus coordinate <-> key conversion, with OctoMap's exact arithmetic.
+//
+//   key(c)    = floor(c * (1.0 / r)) + center   (c promoted to double first, as OctoMap does
+//                                               with its float points: 0.7f * 10 -> 6)
+//   centre(k) = (double(k - center) + 0.5) * r
+// A coordinate is in range when its key fits the key type; conversions say so instead of
+// wrapping around.
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+#include "config.hpp"
+#include "key.hpp"
+#include "point_traits.hpp"
+
+namespace knnocc {
+
+template <class Key = OcKey>
+class Grid {
+ public:
+  using key_type = Key;
+  using index_type = typename Key::index_type;
+  static constexpr int depth = Key::depth;
+
+  /// resolution: voxel edge in metres; must be finite and > 0.
+  explicit Grid(double resolution) : res_(resolution), inv_res_(1.0 / resolution) {
+    if (!(resolution > 0.0) || !std::isfinite(resolution) || !std::isfinite(inv_res_))
+      detail::invalid_argument("resolution must be a finite number > 0, got " +
+                               std::to_string(resolution));
+  }
+
+  double resolution() const { return res_; }
+
+  /// Edge length of a node at tree depth d (0 = root, depth = leaf).
+  double node_size(int d) const { return std::ldexp(res_, depth - d); }
+
+  /// Smallest and largest coordinate that still has a key: [-center r, center r).
+  double min_coord() const { return -static_cast<double>(Key::center) * res_; }
+  double max_coord() const { return static_cast<double>(Key::center) * res_; }
+
+  /// One axis: false (and `out` untouched) when c is NaN/Inf or outside the key range.
+  bool coord_to_index(double c, index_type& out) const {
+    const double scaled = std::floor(inv_res_ * c);
+    // Compare in double before any integer cast: NaN fails both tests.
+    if (!(scaled >= -static_cast<double>(Key::center) && scaled < static_cast<double>(Key::center)))
+      return false;
+    out = static_cast<index_type>(static_cast<std::int64_t>(scaled) + Key::center);
+    return true;
+  }
+
+  bool coord_to_key(double x, double y, double z, Key& out) const {
+    Key k;
+    if (!coord_to_index(x, k.k[0]) || !coord_to_index(y, k.k[1]) || !coord_to_index(z, k.k[2]))
+      return false;
+    out = k;
+    return true;
+  }
+
+  /// Key of any point type (see point_traits.hpp); float coordinates are promoted to double.
+  template <class P>
+  bool point_to_key(const P& p, Key& out) const {
+    return coord_to_key(static_cast<double>(point_x(p)), static_cast<double>(point_y(p)),
+                        static_cast<double>(point_z(p)), out);
+  }
+
+  /// Centre coordinate of a finest-level index.
+  double index_to_coord(index_type k) const {
+    return (static_cast<double>(static_cast<std::int64_t>(k) - Key::center) + 0.5) * res_;
+  }
+
+  /// Centre coordinate, along one axis, of the depth-d node containing leaf index k
+  /// (OctoMap's keyToCoord(key, depth)).
+  double index_to_coord(index_type k, int d) const {
+    if (d == 0) return 0.0;
+    if (d >= depth) return index_to_coord(k);
+    const double cells = std::ldexp(1.0, depth - d);
+    return (std::floor((static_cast<double>(k) - static_cast<double>(Key::center)) / cells) + 0.5) *
+           node_size(d);
+  }
+
+  /// The leaf key with its low (depth - d) bits replaced by 1 followed by zeros: the key OctoMap
+  /// uses for the depth-d node that contains `key`.
+  static Key key_at_depth(const Key& key, int d) {
+    if (d >= depth) return key;
+    const int shift = depth - d;
+    Key out;
+    for (int i = 0; i < 3; ++i) {
+      const std::int64_t v = (static_cast<std::int64_t>(key[i]) - Key::center) >> shift;
+      out[i] = static_cast<index_type>((v << shift) + (std::int64_t{1} << (shift - 1)) + Key::center);
+    }
+    return out;
+  }
+
+ private:
+  double res_;
+  double inv_res_;
+};
+
+}  // namespace knnocc

@@ -1,0 +1,401 @@
+#pragma once
+// OccupancyMap: sparse hashed voxel storage with OctoMap's log-odds update and clamping.
+//
+// Layout: a FlatIndex maps a brick coordinate to a Brick (8x8x8 voxels, see brick.hpp). A brick
+// is the bottom three levels of an octree stored flat: a known-mask (which voxels have a value)
+// and either 512 float log-odds or, after compact(), one value shared by all its known voxels.
+// Coarser octree levels are implicit: the value of a node at depth d is the max over its known
+// leaves (OctoMap's inner-node rule), computed on demand by logodds_at_depth().
+//
+// Only finest-level values are stored, so OctoMap's pruning (merging 8 equal children) has
+// nothing to change here: a pruned OctoMap and this map hold the same leaf values.
+//
+// Thread safety: const member functions touch no shared mutable state and may run concurrently
+// from many threads while no thread writes. Writers (update, set, Accessor, compact, clear) need
+// exclusive access. An Accessor is a per-thread cursor; do not share one between threads.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "../core/config.hpp"
+#include "../core/grid.hpp"
+#include "../core/key.hpp"
+#include "../core/log_odds.hpp"
+#include "../detail/flat_index.hpp"
+#include "brick.hpp"
+
+namespace knnocc {
+
+/// Clamping and occupancy threshold of a map (OctoMap's defaults).
+struct OccupancyParams {
+  float clamp_min = logodds(0.1192);        ///< -2.00002789
+  float clamp_max = logodds(0.971);         ///< 3.51103067
+  float occupancy_threshold = logodds(0.5); ///< 0: occupied iff logodds >= threshold
+
+  /// Throws std::invalid_argument (aborts without exceptions) unless min < threshold <= max.
+  void validate() const {
+    if (!(std::isfinite(clamp_min) && std::isfinite(clamp_max) &&
+          std::isfinite(occupancy_threshold)))
+      detail::invalid_argument("occupancy parameters must be finite");
+    if (!(clamp_min < clamp_max))
+      detail::invalid_argument("clamp_min must be smaller than clamp_max");
+    if (!(occupancy_threshold >= clamp_min && occupancy_threshold <= clamp_max))
+      detail::invalid_argument("occupancy_threshold must lie within [clamp_min, clamp_max]");
+  }
+};
+
+/// Counts of known finest-level voxels.
+struct VoxelCounts {
+  std::size_t occupied = 0;
+  std::size_t free = 0;
+  std::size_t known() const { return occupied + free; }
+};
+
+template <class Key = OcKey>
+class OccupancyMap {
+ public:
+  using key_type = Key;
+  using grid_type = Grid<Key>;
+  using layout = BrickLayout<Key>;
+
+  struct Brick {
+    std::uint64_t coord = 0;          ///< packed brick coordinate (BrickLayout)
+    VoxelMask known;                  ///< voxels that hold a value
+    std::unique_ptr<float[]> values;  ///< 512 log-odds, or null when compacted to `uniform`
+    float uniform = 0.0f;             ///< the value of every known voxel when values is null
+
+    float get(int i) const { return values ? values[static_cast<std::size_t>(i)] : uniform; }
+  };
+
+  explicit OccupancyMap(double resolution, OccupancyParams params = {})
+      : grid_(resolution), params_(params) {
+    params_.validate();
+  }
+
+  const grid_type& grid() const { return grid_; }
+  double resolution() const { return grid_.resolution(); }
+  const OccupancyParams& params() const { return params_; }
+
+  bool is_occupied(float logodds_value) const {
+    return logodds_value >= params_.occupancy_threshold;
+  }
+
+  // ---- point queries -------------------------------------------------------------------------
+
+  /// Log-odds of a finest-level voxel, or nullopt when unknown.
+  std::optional<float> logodds(const Key& key) const {
+    const std::uint32_t slot = index_.find(layout::brick_of(key));
+    if (slot == detail::FlatIndex::kNone) return std::nullopt;
+    const Brick& b = bricks_[slot];
+    const int i = layout::local_of(key);
+    if (!b.known.test(i)) return std::nullopt;
+    return b.get(i);
+  }
+  bool is_known(const Key& key) const { return logodds(key).has_value(); }
+  /// nullopt when unknown.
+  std::optional<bool> is_occupied(const Key& key) const {
+    const auto v = logodds(key);
+    if (!v) return std::nullopt;
+    return is_occupied(*v);
+  }
+
+  /// Value of the depth-d node containing `key` (0 = root, Key::depth = leaf): the max over its
+  /// known leaves, as OctoMap's inner nodes; nullopt when none is known.
+  std::optional<float> logodds_at_depth(const Key& key, int d) const {
+    if (d >= Key::depth) return logodds(key);
+    if (d < 0) d = 0;
+    const int shift = Key::depth - d;
+    std::array<std::int64_t, 3> lo{}, hi{};
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = (static_cast<std::int64_t>(key[a]) >> shift) << shift;
+      hi[a] = lo[a] + (std::int64_t{1} << shift) - 1;
+    }
+    float best = -std::numeric_limits<float>::infinity();
+    bool any = false;
+    visit_box(lo, hi, [&](const Key&, float v) {
+      any = true;
+      best = std::max(best, v);
+    });
+    if (!any) return std::nullopt;
+    return best;
+  }
+
+  // ---- updates -------------------------------------------------------------------------------
+
+  /// OctoMap's updateNode(key, delta): a voxel at the clamp bound in the direction of the update
+  /// is left unchanged; otherwise value += delta (a new voxel starts at 0) and is clamped.
+  /// Returns the new value.
+  float update(const Key& key, float delta) {
+    Brick& b = bricks_[brick_slot_for_write(layout::brick_of(key))];
+    return update_voxel(b, layout::local_of(key), delta);
+  }
+
+  /// Sets a voxel's log-odds, clamped into [clamp_min, clamp_max] (OctoMap's setNodeValue).
+  void set(const Key& key, float value) {
+    Brick& b = bricks_[brick_slot_for_write(layout::brick_of(key))];
+    const int i = layout::local_of(key);
+    const float v = clamp(value);
+    track_change(b, i, v);
+    write(b, i, v);
+  }
+
+  /// A per-thread write cursor that remembers the last brick, so walking along a ray rarely
+  /// hashes. Valid until the map is cleared or destroyed.
+  class Accessor {
+   public:
+    explicit Accessor(OccupancyMap& map) : map_(&map) {}
+    float update(const Key& key, float delta) {
+      return map_->update_voxel(brick(key), layout::local_of(key), delta);
+    }
+    /// The brick holding `key`, created when missing.
+    Brick& brick(const Key& key) {
+      const std::uint64_t c = layout::brick_of(key);
+      if (slot_ == detail::FlatIndex::kNone || c != coord_) {
+        slot_ = map_->brick_slot_for_write(c);
+        coord_ = c;
+      }
+      return map_->bricks_[slot_];
+    }
+
+   private:
+    OccupancyMap* map_;
+    std::uint64_t coord_ = 0;
+    std::uint32_t slot_ = detail::FlatIndex::kNone;
+  };
+  Accessor accessor() { return Accessor(*this); }
+
+  /// Applies `delta` to voxel i of brick b with OctoMap's early abort and clamping.
+  float update_voxel(Brick& b, int i, float delta) {
+    if (b.known.test(i)) {
+      const float v = b.get(i);
+      if ((delta >= 0 && v >= params_.clamp_max) || (delta <= 0 && v <= params_.clamp_min))
+        return v;
+      const float nv = clamp(v + delta);
+      track_change(b, i, nv);
+      write(b, i, nv);
+      return nv;
+    }
+    const float nv = clamp(0.0f + delta);
+    track_change(b, i, nv);
+    write(b, i, nv);
+    return nv;
+  }
+
+  // ---- iteration -----------------------------------------------------------------------------
+
+  /// Calls f(key, logodds) for every known finest-level voxel (in storage order).
+  template <class F>
+  void for_each_voxel(F&& f) const {
+    for (const Brick& b : bricks_)
+      b.known.for_each([&](int i) { f(layout::key_of(b.coord, i), b.get(i)); });
+  }
+
+  /// Calls f(key, logodds) for every known voxel with lo[a] <= key[a] <= hi[a] on all axes.
+  template <class F>
+  void for_each_voxel_in_bbox(const Key& lo, const Key& hi, F&& f) const {
+    visit_box({lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, f);
+  }
+
+  /// Same, with a box in world coordinates (clipped to the key range).
+  template <class F>
+  void for_each_voxel_in_bbox(const std::array<double, 3>& min, const std::array<double, 3>& max,
+                              F&& f) const {
+    std::array<std::int64_t, 3> lo{}, hi{};
+    for (int a = 0; a < 3; ++a) {
+      // Same rounding as Grid::coord_to_index, then clipped to the key range.
+      const double inv = 1.0 / grid_.resolution();
+      const double l = std::max(std::floor(inv * min[a]), -static_cast<double>(Key::center));
+      const double h = std::min(std::floor(inv * max[a]), static_cast<double>(Key::center) - 1);
+      if (!(l <= h)) return;
+      lo[a] = static_cast<std::int64_t>(l) + Key::center;
+      hi[a] = static_cast<std::int64_t>(h) + Key::center;
+    }
+    visit_box(lo, hi, f);
+  }
+
+  /// Number of known finest-level voxels.
+  std::size_t num_voxels() const { return known_count_; }
+  std::size_t num_bricks() const { return bricks_.size(); }
+  bool empty() const { return known_count_ == 0; }
+
+  VoxelCounts count_voxels() const {
+    VoxelCounts c;
+    for_each_voxel([&](const Key&, float v) { (is_occupied(v) ? c.occupied : c.free)++; });
+    return c;
+  }
+
+  // ---- memory --------------------------------------------------------------------------------
+
+  /// Compaction (the analogue of OctoMap's pruning): every brick whose known voxels all hold the
+  /// same value drops its 512-value array. Values and queries are unchanged. Returns the number
+  /// of bricks compacted by this call.
+  std::size_t compact() {
+    std::size_t n = 0;
+    for (Brick& b : bricks_) {
+      if (!b.values) continue;
+      bool first = true, uniform = true;
+      float u = 0.0f;
+      b.known.for_each([&](int i) {
+        const float v = b.values[static_cast<std::size_t>(i)];
+        if (first) {
+          u = v;
+          first = false;
+        } else if (v != u) {
+          uniform = false;
+        }
+      });
+      if (!uniform) continue;
+      b.values.reset();
+      b.uniform = u;
+      ++n;
+    }
+    return n;
+  }
+
+  /// Bytes held by the map (bricks, value arrays, hash index, change set).
+  std::size_t memory_usage() const {
+    std::size_t bytes = sizeof(*this) + bricks_.capacity() * sizeof(Brick) + index_.memory_usage();
+    for (const Brick& b : bricks_)
+      if (b.values) bytes += kBrickVoxels * sizeof(float);
+    bytes += changed_.size() * (sizeof(std::uint64_t) + sizeof(bool) + 2 * sizeof(void*));
+    return bytes;
+  }
+
+  void clear() {
+    bricks_.clear();
+    index_.reset();
+    changed_.clear();
+    known_count_ = 0;
+  }
+
+  // ---- change detection (OctoMap's enableChangeDetection semantics) --------------------------
+
+  /// When on, every update records its key: `true` for a voxel that became known, `false` for a
+  /// known voxel whose occupancy flipped; a second flip of a not-new voxel removes the record.
+  void enable_change_detection(bool on) { change_detection_ = on; }
+  bool change_detection_enabled() const { return change_detection_; }
+  void reset_change_detection() { changed_.clear(); }
+  std::size_t num_changed_keys() const { return changed_.size(); }
+  /// Calls f(key, became_known) for every recorded key.
+  template <class F>
+  void for_each_changed_key(F&& f) const {
+    for (const auto& [packed, created] : changed_) f(Key::unpack(packed), created);
+  }
+
+  // ---- brick access for whole-scan writers (ScanInserter) ------------------------------------
+
+  /// The brick with packed coordinate `coord`, created when missing.
+  Brick& brick_for_write(std::uint64_t coord) { return bricks_[brick_slot_for_write(coord)]; }
+  const Brick* find_brick(std::uint64_t coord) const {
+    const std::uint32_t slot = index_.find(coord);
+    return slot == detail::FlatIndex::kNone ? nullptr : &bricks_[slot];
+  }
+  const std::vector<Brick>& bricks() const { return bricks_; }
+
+ private:
+  float clamp(float v) const {
+    if (v < params_.clamp_min) return params_.clamp_min;
+    if (v > params_.clamp_max) return params_.clamp_max;
+    return v;
+  }
+
+  std::uint32_t brick_slot_for_write(std::uint64_t coord) {
+    bool inserted = false;
+    const auto next = static_cast<std::uint32_t>(bricks_.size());
+    const std::uint32_t slot = index_.find_or_insert(coord, next, inserted);
+    if (inserted) {
+      Brick& b = bricks_.emplace_back();
+      b.coord = coord;
+      b.values.reset(new float[kBrickVoxels]());
+    }
+    return slot;
+  }
+
+  void write(Brick& b, int i, float v) {
+    if (!b.known.test(i)) {
+      b.known.set(i);
+      ++known_count_;
+    }
+    if (!b.values) {
+      if (v == b.uniform) return;
+      b.values.reset(new float[kBrickVoxels]);
+      std::fill(b.values.get(), b.values.get() + kBrickVoxels, b.uniform);
+    }
+    b.values[static_cast<std::size_t>(i)] = v;
+  }
+
+  // Called before write(): compares the old state of voxel i with the new value.
+  void track_change(const Brick& b, int i, float new_value) {
+    if (!change_detection_) return;
+    const std::uint64_t packed = layout::key_of(b.coord, i).pack();
+    if (!b.known.test(i)) {
+      changed_.emplace(packed, true);
+      return;
+    }
+    if (is_occupied(b.get(i)) == is_occupied(new_value)) return;
+    auto it = changed_.find(packed);
+    if (it == changed_.end())
+      changed_.emplace(packed, false);
+    else
+      changed_.erase(it);
+  }
+
+  // Visits known voxels in the inclusive key box [lo, hi], probing bricks or scanning them all,
+  // whichever touches fewer bricks.
+  template <class F>
+  void visit_box(const std::array<std::int64_t, 3>& lo, const std::array<std::int64_t, 3>& hi,
+                 F&& f) const {
+    std::array<std::int64_t, 3> blo{}, bhi{};
+    double boxes = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      if (lo[a] > hi[a]) return;
+      blo[a] = lo[a] >> kBrickBits;
+      bhi[a] = hi[a] >> kBrickBits;
+      boxes *= static_cast<double>(bhi[a] - blo[a] + 1);
+    }
+    auto visit_brick = [&](const Brick& b) {
+      const auto o = layout::origin_of(b.coord);
+      const bool inside = o[0] >= lo[0] && o[0] + kBrickEdge - 1 <= hi[0] && o[1] >= lo[1] &&
+                          o[1] + kBrickEdge - 1 <= hi[1] && o[2] >= lo[2] &&
+                          o[2] + kBrickEdge - 1 <= hi[2];
+      b.known.for_each([&](int i) {
+        const Key k = layout::key_of(b.coord, i);
+        if (inside || (k[0] >= lo[0] && k[0] <= hi[0] && k[1] >= lo[1] && k[1] <= hi[1] &&
+                       k[2] >= lo[2] && k[2] <= hi[2]))
+          f(k, b.get(i));
+      });
+    };
+    if (boxes >= static_cast<double>(bricks_.size())) {
+      for (const Brick& b : bricks_) {
+        const auto o = layout::origin_of(b.coord);
+        if ((o[0] >> kBrickBits) < blo[0] || (o[0] >> kBrickBits) > bhi[0] ||
+            (o[1] >> kBrickBits) < blo[1] || (o[1] >> kBrickBits) > bhi[1] ||
+            (o[2] >> kBrickBits) < blo[2] || (o[2] >> kBrickBits) > bhi[2])
+          continue;
+        visit_brick(b);
+      }
+      return;
+    }
+    for (std::int64_t x = blo[0]; x <= bhi[0]; ++x)
+      for (std::int64_t y = blo[1]; y <= bhi[1]; ++y)
+        for (std::int64_t z = blo[2]; z <= bhi[2]; ++z)
+          if (const Brick* b = find_brick(layout::pack_brick(x, y, z))) visit_brick(*b);
+  }
+
+  grid_type grid_;
+  OccupancyParams params_;
+  std::vector<Brick> bricks_;
+  detail::FlatIndex index_;
+  std::size_t known_count_ = 0;
+  bool change_detection_ = false;
+  std::unordered_map<std::uint64_t, bool> changed_;
+};
+
+}  // namespace knnocc

@@ -1,0 +1,188 @@
+// ScanInserter: OctoMap's insertPointCloud semantics, against a plain set-based re-statement.
+#include <doctest/doctest.h>
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <vector>
+
+#include <knnocc/map/scan_inserter.hpp>
+
+#include "test_support.hpp"
+
+using knnocc::OcKey;
+using knnocc::OccupancyMap;
+using knnocc::Point3f;
+using knnocc::WideKey;
+
+namespace {
+
+// insertPointCloud written the obvious way (OctoMap's computeUpdate with key sets), used as the
+// oracle for the mask-based inserter.
+template <class Key>
+void reference_insert(OccupancyMap<Key>& map, const Point3f& o, const std::vector<Point3f>& pts,
+                      double max_range, bool discretize) {
+  const auto& g = map.grid();
+  std::vector<Point3f> scan;
+  if (discretize) {
+    std::set<Key> seen;
+    for (const auto& p : pts) {
+      Key k;
+      if (g.point_to_key(p, k) && seen.insert(k).second)
+        scan.push_back({float(g.index_to_coord(k[0])), float(g.index_to_coord(k[1])),
+                        float(g.index_to_coord(k[2]))});
+    }
+  } else {
+    for (const auto& p : pts)
+      if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) scan.push_back(p);
+  }
+  std::set<Key> free_cells, occupied_cells;
+  std::vector<Key> ray;
+  for (const auto& p : scan) {
+    const float dx = p.x - o.x, dy = p.y - o.y, dz = p.z - o.z;
+    const double norm = std::sqrt(double(dx * dx + dy * dy + dz * dz));
+    if (max_range < 0 || norm <= max_range) {
+      if (knnocc::compute_ray_keys(g, o, p, ray)) free_cells.insert(ray.begin(), ray.end());
+      Key k;
+      if (g.point_to_key(p, k)) occupied_cells.insert(k);
+    } else if (knnocc::compute_ray_keys(g, o, knnocc::truncate_ray(o, p, max_range), ray)) {
+      free_cells.insert(ray.begin(), ray.end());
+    }
+  }
+  for (const auto& k : occupied_cells) free_cells.erase(k);
+  for (const auto& k : free_cells) map.update(k, knnocc::logodds(0.4));
+  for (const auto& k : occupied_cells) map.update(k, knnocc::logodds(0.7));
+}
+
+template <class Key>
+std::map<Key, float> dump(const OccupancyMap<Key>& map) {
+  std::map<Key, float> out;
+  map.for_each_voxel([&](const Key& k, float v) { out[k] = v; });
+  return out;
+}
+
+std::vector<Point3f> random_scene(knnocc::test::Rng& rng, int n, float extent) {
+  std::uniform_real_distribution<float> u(-extent, extent);
+  std::vector<Point3f> pts;
+  for (int i = 0; i < n; ++i) {
+    Point3f p{u(rng), u(rng), u(rng) * 0.3f};
+    if (i % 5 == 0) p = pts.empty() ? p : Point3f{pts.back().x + 0.01f, pts.back().y, pts.back().z};
+    pts.push_back(p);
+  }
+  return pts;
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("insert.matches_set_based_reference", Key, OcKey, WideKey) {
+  knnocc::test::Rng rng(42);
+  for (const double max_range : {-1.0, 2.5}) {
+    for (const bool discretize : {false, true}) {
+      CAPTURE(max_range);
+      CAPTURE(discretize);
+      OccupancyMap<Key> fast(0.1), slow(0.1);
+      knnocc::ScanInserter<Key> inserter(fast);
+      std::uniform_real_distribution<float> jitter(-0.5f, 0.5f);
+      for (int scan = 0; scan < 6; ++scan) {
+        const Point3f origin{jitter(rng), jitter(rng), jitter(rng)};
+        const auto pts = random_scene(rng, 800, 4.0f);
+        inserter.insert_point_cloud(origin, pts, max_range, discretize);
+        reference_insert(slow, origin, pts, max_range, discretize);
+        REQUIRE(dump(fast) == dump(slow));
+      }
+    }
+  }
+}
+
+TEST_CASE("insert.order_independent_and_occupied_wins") {
+  knnocc::test::Rng rng(3);
+  auto pts = random_scene(rng, 2000, 3.0f);
+  OccupancyMap<OcKey> a(0.05), b(0.05);
+  knnocc::insert_point_cloud(a, Point3f{}, pts);
+  std::shuffle(pts.begin(), pts.end(), rng);
+  knnocc::insert_point_cloud(b, Point3f{}, pts);
+  CHECK(dump(a) == dump(b));
+  // A point whose voxel lies on another point's ray: hit wins, whatever the order.
+  for (int order = 0; order < 2; ++order) {
+    OccupancyMap<OcKey> m(0.1);
+    std::vector<Point3f> two = {{1.05f, 0.05f, 0.05f}, {2.05f, 0.05f, 0.05f}};
+    if (order) std::swap(two[0], two[1]);
+    const auto st = knnocc::insert_point_cloud(m, Point3f{0.05f, 0.05f, 0.05f}, two);
+    OcKey k;
+    REQUIRE(m.grid().coord_to_key(1.05, 0.05, 0.05, k));
+    CHECK(*m.logodds(k) == knnocc::logodds(0.7));
+    CHECK(st.occupied_voxels == 2);
+    CHECK(st.free_voxels == 19);  // keys 0..19 minus the hit at 10
+  }
+}
+
+TEST_CASE("insert.max_range_carves_without_a_hit") {
+  OccupancyMap<OcKey> m(0.1);
+  const std::vector<Point3f> pts = {{5.05f, 0.05f, 0.05f}};
+  const auto st = knnocc::insert_point_cloud(m, Point3f{0.05f, 0.05f, 0.05f}, pts, 2.0);
+  CHECK(st.beyond_max_range == 1);
+  CHECK(st.occupied_voxels == 0);
+  OcKey end_key, last_free;
+  REQUIRE(m.grid().coord_to_key(2.05, 0.05, 0.05, end_key));
+  REQUIRE(m.grid().coord_to_key(1.95, 0.05, 0.05, last_free));
+  CHECK_FALSE(m.logodds(end_key).has_value());  // the truncated end voxel is not freed
+  CHECK(m.logodds(last_free) == std::optional<float>(knnocc::logodds(0.4)));
+  CHECK(m.count_voxels().occupied == 0);
+  CHECK(m.num_voxels() == 20);
+  CHECK_THROWS_AS(knnocc::insert_point_cloud(m, Point3f{}, pts, 0.0), std::invalid_argument);
+}
+
+TEST_CASE("insert.updates_survive_gaps_and_repeat") {
+  // Hits accumulate over scans; a voxel untouched for many scans keeps its value.
+  OccupancyMap<OcKey> m(0.1);
+  knnocc::ScanInserter<OcKey> ins(m);
+  const std::vector<Point3f> wall = {{1.05f, 0.05f, 0.05f}};
+  const std::vector<Point3f> elsewhere = {{0.05f, 1.05f, 0.05f}};
+  ins.insert_point_cloud(Point3f{0.05f, 0.05f, 0.05f}, wall);
+  for (int i = 0; i < 50; ++i) ins.insert_point_cloud(Point3f{0.05f, 0.05f, 0.05f}, elsewhere);
+  ins.insert_point_cloud(Point3f{0.05f, 0.05f, 0.05f}, wall);
+  OcKey k;
+  REQUIRE(m.grid().coord_to_key(1.05, 0.05, 0.05, k));
+  CHECK(*m.logodds(k) == knnocc::logodds(0.7) + knnocc::logodds(0.7));
+}
+
+TEST_CASE("insert.bad_points_are_skipped_and_counted") {
+  OccupancyMap<OcKey> m(0.1);
+  const float nan = std::nanf(""), inf = INFINITY;
+  const std::vector<Point3f> pts = {
+      {nan, 0, 0}, {0, inf, 0}, {1e9f, 0, 0}, {0.55f, 0.05f, 0.05f}, {-inf, -inf, -inf}};
+  const auto st = knnocc::insert_point_cloud(m, Point3f{0.05f, 0.05f, 0.05f}, pts);
+  CHECK(st.points == 5);
+  CHECK(st.nonfinite == 3);
+  CHECK(st.out_of_range == 1);
+  CHECK(st.occupied_voxels == 1);
+  CHECK(m.num_voxels() == 6);
+  // A NaN origin inserts nothing at all.
+  OccupancyMap<OcKey> n(0.1);
+  const auto sn = knnocc::insert_point_cloud(n, Point3f{nan, 0, 0}, pts);
+  CHECK_FALSE(sn.origin_valid);
+  CHECK(n.empty());
+  // Empty cloud: no-op.
+  const auto se = knnocc::insert_point_cloud(n, Point3f{}, std::vector<Point3f>{});
+  CHECK(se.points == 0);
+  CHECK(n.empty());
+}
+
+TEST_CASE("insert.point_types_agree") {
+  knnocc::test::Rng rng(8);
+  const auto pts = random_scene(rng, 500, 2.0f);
+  std::vector<Eigen::Vector3f> eig;
+  std::vector<std::array<float, 3>> arr;
+  for (auto& p : pts) {
+    eig.emplace_back(p.x, p.y, p.z);
+    arr.push_back({p.x, p.y, p.z});
+  }
+  OccupancyMap<OcKey> a(0.1), b(0.1), c(0.1);
+  knnocc::insert_point_cloud(a, Point3f{}, pts);
+  knnocc::insert_point_cloud(b, Eigen::Vector3f(0, 0, 0), eig);
+  knnocc::insert_point_cloud(c, std::array<double, 3>{0, 0, 0}, arr);
+  CHECK(dump(a) == dump(b));
+  CHECK(dump(a) == dump(c));
+}

@@ -1,0 +1,51 @@
+#pragma once
+// Shared helpers for the test suite: locating the real datasets (skipped when absent) and a
+// deterministic random generator.
+
+#include <cstdint>
+#include <filesystem>
+#include <random>
+#include <string>
+
+namespace knnocc::test {
+
+/// ../shared/data beside the project root, or "" when the folder is absent.
+inline std::string data_dir() {
+#ifdef KNNOCC_SOURCE_DIR
+  const std::filesystem::path p = std::filesystem::path(KNNOCC_SOURCE_DIR) / ".." / "shared" / "data";
+  if (std::filesystem::is_directory(p)) return p.lexically_normal().string();
+#endif
+  return {};
+}
+
+/// A data file or folder under data_dir(), or "" when it (or the data folder) is missing.
+inline std::string data_path(const std::string& relative) {
+  const std::string d = data_dir();
+  if (d.empty()) return {};
+  const std::filesystem::path p = std::filesystem::path(d) / relative;
+  return std::filesystem::exists(p) ? p.string() : std::string{};
+}
+
+/// scan.dat decompressed by the ctest fixture into the build tree, or "" when absent.
+inline std::string scan_dat_path() {
+#ifdef KNNOCC_BINARY_DIR
+  const std::filesystem::path p = std::filesystem::path(KNNOCC_BINARY_DIR) / "data" / "scan.dat";
+  if (std::filesystem::exists(p)) return p.string();
+#endif
+  return {};
+}
+
+/// Scratch folder for files a test writes (inside the build tree when known).
+inline std::filesystem::path scratch_dir(const std::string& name) {
+#ifdef KNNOCC_BINARY_DIR
+  std::filesystem::path p = std::filesystem::path(KNNOCC_BINARY_DIR) / "test_scratch" / name;
+#else
+  std::filesystem::path p = std::filesystem::temp_directory_path() / "knnocc_test" / name;
+#endif
+  std::filesystem::create_directories(p);
+  return p;
+}
+
+using Rng = std::mt19937_64;
+
+}  // namespace knnocc::test

@@ -1,0 +1,582 @@
+#pragma once
+// PLY point clouds: read_ply() and write_ply().
+//
+// Reading supports "format ascii 1.0", "binary_little_endian 1.0" and "binary_big_endian 1.0".
+// The "vertex" element must have scalar properties x, y, z of type float/float32/double/float64
+// (doubles are narrowed to float); an optional integer property "id" fills Cloud::ids. Any other
+// vertex property of a PLY scalar type is skipped. Other elements (e.g. "face" with list
+// properties) are skipped when they follow "vertex"; in binary files an element with a list
+// property *before* "vertex" is rejected, since skipping it would need a per-record walk.
+// comment/obj_info header lines are ignored and CRLF line ends are tolerated in the header.
+//
+// NaN and Inf coordinates are NOT an error here: they are returned as read, and the mapping layer
+// skips and counts them. Every problem with the file itself (cannot open, not a PLY, unknown
+// format, missing x/y/z, truncated or unparsable data, vertex counts larger than the file can
+// hold) throws io::Error naming the file; nothing is allocated beyond what the file can back.
+//
+// Writing produces binary little-endian (or ascii) "float x y z" plus "uint id" when ids are
+// given, atomically: a temp file in the same directory is renamed over the target.
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "cloud.hpp"
+#include "detail/file_text.hpp"
+#include "error.hpp"
+
+namespace knnocc::io {
+namespace detail {
+
+enum class PlyType : std::uint8_t { i8, u8, i16, u16, i32, u32, f32, f64 };
+enum class PlyFormat : std::uint8_t { ascii, binary_le, binary_be };
+
+inline bool ply_type_from_name(const std::string& s, PlyType& t) {
+  struct Entry {
+    const char* name;
+    PlyType type;
+  };
+  static const Entry table[] = {
+      {"char", PlyType::i8},     {"int8", PlyType::i8},     {"uchar", PlyType::u8},
+      {"uint8", PlyType::u8},    {"short", PlyType::i16},   {"int16", PlyType::i16},
+      {"ushort", PlyType::u16},  {"uint16", PlyType::u16},  {"int", PlyType::i32},
+      {"int32", PlyType::i32},   {"uint", PlyType::u32},    {"uint32", PlyType::u32},
+      {"float", PlyType::f32},   {"float32", PlyType::f32}, {"double", PlyType::f64},
+      {"float64", PlyType::f64},
+  };
+  for (const Entry& e : table) {
+    if (s == e.name) {
+      t = e.type;
+      return true;
+    }
+  }
+  return false;
+}
+
+inline std::size_t ply_type_size(PlyType t) noexcept {
+  switch (t) {
+    case PlyType::i8:
+    case PlyType::u8:
+      return 1;
+    case PlyType::i16:
+    case PlyType::u16:
+      return 2;
+    case PlyType::i32:
+    case PlyType::u32:
+    case PlyType::f32:
+      return 4;
+    case PlyType::f64:
+      return 8;
+  }
+  return 0;
+}
+
+inline bool ply_type_is_real(PlyType t) noexcept { return t == PlyType::f32 || t == PlyType::f64; }
+inline bool ply_type_is_signed(PlyType t) noexcept {
+  return t == PlyType::i8 || t == PlyType::i16 || t == PlyType::i32;
+}
+
+struct PlyProperty {
+  std::string name;
+  PlyType type = PlyType::u8;  // item type for lists
+  bool is_list = false;
+  PlyType count_type = PlyType::u8;  // lists only
+  std::size_t offset = 0;            // byte offset in a binary record (scalar-only elements)
+};
+
+struct PlyElement {
+  std::string name;
+  std::uint64_t count = 0;
+  std::vector<PlyProperty> props;
+
+  const PlyProperty* first_list() const {
+    for (const PlyProperty& p : props) {
+      if (p.is_list) return &p;
+    }
+    return nullptr;
+  }
+  std::size_t record_size() const {  // binary bytes per record; scalar-only elements
+    std::size_t n = 0;
+    for (const PlyProperty& p : props) n += ply_type_size(p.type);
+    return n;
+  }
+  int find(const char* prop_name) const {
+    for (std::size_t i = 0; i < props.size(); ++i) {
+      if (props[i].name == prop_name) return static_cast<int>(i);
+    }
+    return -1;
+  }
+};
+
+struct PlyHeader {
+  PlyFormat format = PlyFormat::ascii;
+  std::vector<PlyElement> elements;
+  std::size_t data_offset = 0;  // first byte after the end_header line
+  std::size_t line_count = 0;   // header lines, so ascii errors can report file line numbers
+};
+
+inline std::vector<std::string> split_words(const char* p, const char* end) {
+  std::vector<std::string> words;
+  while (true) {
+    while (p != end && is_blank(*p)) ++p;
+    if (p == end) break;
+    const char* e = p;
+    while (e != end && !is_blank(*e)) ++e;
+    words.emplace_back(p, e);
+    p = e;
+  }
+  return words;
+}
+
+inline PlyHeader parse_ply_header(const std::string& path, const char* data, std::size_t size) {
+  PlyHeader h;
+  bool have_format = false;
+  const char* p = data;
+  const char* const end = data + size;
+  std::size_t line = 0;
+  // Check the magic line by hand: splitting a large non-PLY file into "words" would be slow.
+  {
+    const char* q = data + 3;
+    if (size < 3 || std::memcmp(data, "ply", 3) != 0) q = nullptr;
+    while (q && q != end && is_blank(*q)) ++q;
+    if (!q || (q != end && *q != '\n')) {
+      throw Error(path, "not a PLY file (first line is not 'ply')");
+    }
+  }
+  while (true) {
+    if (p == end) throw Error(path, "PLY header has no end_header line");
+    ++line;
+    const void* nl = std::memchr(p, '\n', static_cast<std::size_t>(end - p));
+    const char* le = nl ? static_cast<const char*>(nl) : end;
+    const char* next = nl ? le + 1 : end;
+    const std::vector<std::string> w = split_words(p, le);
+    p = next;
+    const auto bad = [&](const std::string& why) {
+      return Error(path, "PLY header line " + std::to_string(line) + ": " + why);
+    };
+
+    if (line == 1 || w.empty()) continue;  // line 1 is the magic checked above
+    const std::string& key = w[0];
+    if (key == "comment" || key == "obj_info") continue;
+    if (key == "end_header") {
+      if (w.size() != 1) throw bad("unexpected text after end_header");
+      break;
+    }
+    if (key == "format") {
+      if (w.size() < 2) throw bad("format line names no format");
+      if (w[1] == "ascii") {
+        h.format = PlyFormat::ascii;
+      } else if (w[1] == "binary_little_endian") {
+        h.format = PlyFormat::binary_le;
+      } else if (w[1] == "binary_big_endian") {
+        h.format = PlyFormat::binary_be;
+      } else {
+        throw bad("unknown PLY format '" + w[1] + "'");
+      }
+      have_format = true;
+    } else if (key == "element") {
+      if (w.size() != 3) throw bad("expected 'element <name> <count>'");
+      PlyElement el;
+      el.name = w[1];
+      if (!parse_int_token(w[2].data(), w[2].data() + w[2].size(), el.count)) {
+        throw bad("invalid element count '" + w[2] + "'");
+      }
+      for (const PlyElement& other : h.elements) {
+        if (other.name == el.name) throw bad("duplicate element '" + el.name + "'");
+      }
+      h.elements.push_back(std::move(el));
+    } else if (key == "property") {
+      if (h.elements.empty()) throw bad("property before any element");
+      PlyProperty prop;
+      if (w.size() >= 2 && w[1] == "list") {
+        if (w.size() != 5) throw bad("expected 'property list <count type> <type> <name>'");
+        if (!ply_type_from_name(w[2], prop.count_type)) {
+          throw bad("unknown PLY property type '" + w[2] + "'");
+        }
+        if (ply_type_is_real(prop.count_type)) {
+          throw bad("list count type must be an integer type, not '" + w[2] + "'");
+        }
+        if (!ply_type_from_name(w[3], prop.type)) {
+          throw bad("unknown PLY property type '" + w[3] + "'");
+        }
+        prop.is_list = true;
+        prop.name = w[4];
+      } else {
+        if (w.size() != 3) throw bad("expected 'property <type> <name>'");
+        if (!ply_type_from_name(w[1], prop.type)) {
+          throw bad("unknown PLY property type '" + w[1] + "'");
+        }
+        prop.name = w[2];
+      }
+      PlyElement& el = h.elements.back();
+      if (el.find(prop.name.c_str()) >= 0) {
+        throw bad("duplicate property '" + prop.name + "' in element '" + el.name + "'");
+      }
+      prop.offset = el.record_size();
+      el.props.push_back(std::move(prop));
+    } else {
+      throw bad("unknown PLY header keyword '" + key + "'");
+    }
+  }
+  if (!have_format) throw Error(path, "PLY header has no format line");
+  h.data_offset = static_cast<std::size_t>(p - data);
+  h.line_count = line;
+  return h;
+}
+
+inline bool host_is_little_endian() noexcept {
+  const std::uint16_t one = 1;
+  unsigned char first = 0;
+  std::memcpy(&first, &one, 1);
+  return first == 1;
+}
+
+template <class T>
+T load_scalar(const unsigned char* p, bool swap) noexcept {
+  unsigned char b[sizeof(T)];
+  std::memcpy(b, p, sizeof(T));
+  if (swap) std::reverse(b, b + sizeof(T));
+  T v;
+  std::memcpy(&v, b, sizeof(T));
+  return v;
+}
+
+inline float load_coord(const unsigned char* p, PlyType t, bool swap) noexcept {
+  return t == PlyType::f32 ? load_scalar<float>(p, swap) : to_float(load_scalar<double>(p, swap));
+}
+
+// Integer property as int64 (every PLY integer type fits).
+inline std::int64_t load_integer(const unsigned char* p, PlyType t, bool swap) noexcept {
+  switch (t) {
+    case PlyType::i8:
+      return load_scalar<std::int8_t>(p, swap);
+    case PlyType::u8:
+      return load_scalar<std::uint8_t>(p, swap);
+    case PlyType::i16:
+      return load_scalar<std::int16_t>(p, swap);
+    case PlyType::u16:
+      return load_scalar<std::uint16_t>(p, swap);
+    case PlyType::i32:
+      return load_scalar<std::int32_t>(p, swap);
+    case PlyType::u32:
+      return load_scalar<std::uint32_t>(p, swap);
+    case PlyType::f32:
+    case PlyType::f64:
+      break;
+  }
+  return 0;
+}
+
+struct PlyVertexLayout {
+  std::size_t index = 0;  // position of "vertex" in the element list
+  int x = -1, y = -1, z = -1, id = -1;
+};
+
+inline PlyVertexLayout locate_vertex(const std::string& path, const PlyHeader& h) {
+  PlyVertexLayout v;
+  bool found = false;
+  for (std::size_t i = 0; i < h.elements.size() && !found; ++i) {
+    if (h.elements[i].name == "vertex") {
+      v.index = i;
+      found = true;
+    }
+  }
+  if (!found) throw Error(path, "PLY file has no 'vertex' element");
+  const PlyElement& el = h.elements[v.index];
+  int* const slots[3] = {&v.x, &v.y, &v.z};
+  const char* const names[3] = {"x", "y", "z"};
+  for (int k = 0; k < 3; ++k) {
+    *slots[k] = el.find(names[k]);
+    if (*slots[k] < 0) {
+      throw Error(path, std::string("vertex element has no property '") + names[k] + "'");
+    }
+    const PlyProperty& prop = el.props[static_cast<std::size_t>(*slots[k])];
+    if (prop.is_list || !ply_type_is_real(prop.type)) {
+      throw Error(
+          path, std::string("vertex property '") + names[k] + "' must be a float or double scalar");
+    }
+  }
+  v.id = el.find("id");
+  if (v.id >= 0) {
+    const PlyProperty& prop = el.props[static_cast<std::size_t>(v.id)];
+    if (prop.is_list || ply_type_is_real(prop.type)) {
+      throw Error(path, "vertex property 'id' must be an integer scalar");
+    }
+  }
+  return v;
+}
+
+inline Error ply_truncated(const std::string& path, std::uint64_t count, std::size_t bytes) {
+  return Error(path, "file truncated: header claims " + std::to_string(count) +
+                         " vertices but only " + std::to_string(bytes) + " bytes of data");
+}
+
+inline Cloud read_ply_binary(const std::string& path, const PlyHeader& h, const PlyVertexLayout& v,
+                             const unsigned char* p, std::size_t remaining) {
+  for (std::size_t i = 0; i < v.index; ++i) {
+    const PlyElement& el = h.elements[i];
+    if (const PlyProperty* list = el.first_list()) {
+      throw Error(path, "unsupported binary PLY: element '" + el.name +
+                            "' before 'vertex' has list property '" + list->name + "'");
+    }
+    const std::size_t rec = el.record_size();
+    if (rec != 0 && el.count > remaining / rec) {
+      throw Error(path, "file truncated: element '" + el.name + "' claims " +
+                            std::to_string(el.count) + " records of " + std::to_string(rec) +
+                            " bytes but only " + std::to_string(remaining) +
+                            " bytes of data remain");
+    }
+    const std::size_t skip = static_cast<std::size_t>(el.count) * rec;
+    p += skip;
+    remaining -= skip;
+  }
+
+  const PlyElement& el = h.elements[v.index];
+  if (const PlyProperty* list = el.first_list()) {
+    throw Error(path,
+                "unsupported binary PLY: list property '" + list->name + "' in the vertex element");
+  }
+  const std::size_t rec = el.record_size();
+  // Checked before any allocation, so a lying header cannot make us reserve gigabytes.
+  if (el.count > remaining / rec) throw ply_truncated(path, el.count, remaining);
+  const std::size_t n = static_cast<std::size_t>(el.count);
+
+  const bool swap = (h.format == PlyFormat::binary_le) != host_is_little_endian();
+  const PlyProperty& px = el.props[static_cast<std::size_t>(v.x)];
+  const PlyProperty& py = el.props[static_cast<std::size_t>(v.y)];
+  const PlyProperty& pz = el.props[static_cast<std::size_t>(v.z)];
+
+  Cloud cloud;
+  cloud.points.resize(n);
+  static_assert(sizeof(Point3f) == 3 * sizeof(float) && std::is_trivially_copyable_v<Point3f>,
+                "the bulk memcpy below needs Point3f to be three packed floats");
+  if (!swap && rec == sizeof(Point3f) && px.type == PlyType::f32 && py.type == PlyType::f32 &&
+      pz.type == PlyType::f32 && px.offset == 0 && py.offset == 4 && pz.offset == 8) {
+    // The common "float x y z" file is byte-identical to our array: one memcpy.
+    if (n != 0) std::memcpy(cloud.points.data(), p, n * rec);
+  } else {
+    for (std::size_t i = 0; i < n; ++i) {
+      const unsigned char* r = p + i * rec;
+      cloud.points[i] = Point3f{load_coord(r + px.offset, px.type, swap),
+                                load_coord(r + py.offset, py.type, swap),
+                                load_coord(r + pz.offset, pz.type, swap)};
+    }
+  }
+  if (v.id >= 0) {
+    const PlyProperty& pid = el.props[static_cast<std::size_t>(v.id)];
+    cloud.ids.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::int64_t id = load_integer(p + i * rec + pid.offset, pid.type, swap);
+      if (id < 0) {
+        throw Error(path, "vertex " + std::to_string(i) + " has negative id " + std::to_string(id));
+      }
+      cloud.ids[i] = static_cast<std::uint64_t>(id);
+    }
+  }
+  return cloud;
+}
+
+// Whitespace-separated tokens of an ascii PLY body, tracking the file line for error messages.
+class PlyAsciiCursor {
+ public:
+  PlyAsciiCursor(const char* p, const char* end, std::size_t line)
+      : p_(p), end_(end), line_(line) {}
+
+  bool next(const char*& b, const char*& e) {
+    while (p_ != end_ && is_space(*p_)) {
+      if (*p_ == '\n') ++line_;
+      ++p_;
+    }
+    if (p_ == end_) return false;
+    b = p_;
+    while (p_ != end_ && !is_space(*p_)) ++p_;
+    e = p_;
+    return true;
+  }
+  std::size_t line() const noexcept { return line_; }
+  std::size_t remaining() const noexcept { return static_cast<std::size_t>(end_ - p_); }
+
+ private:
+  const char* p_;
+  const char* end_;
+  std::size_t line_;
+};
+
+inline Cloud read_ply_ascii(const std::string& path, const PlyHeader& h, const PlyVertexLayout& v,
+                            const char* p, const char* end) {
+  PlyAsciiCursor cur(p, end, h.line_count + 1);
+  const char* b = nullptr;
+  const char* e = nullptr;
+  const auto where = [&](const PlyElement& el, std::uint64_t i) {
+    return "line " + std::to_string(cur.line()) + " (" + el.name + " " + std::to_string(i) + ")";
+  };
+  const auto truncated = [&](const PlyElement& el, std::uint64_t i) {
+    return Error(path, "truncated ascii data: header claims " + std::to_string(el.count) + " " +
+                           el.name + " records but data ends in record " + std::to_string(i));
+  };
+  const auto list_count = [&](const PlyElement& el, std::uint64_t i) {
+    std::uint64_t c = 0;
+    if (!parse_int_token(b, e, c)) {
+      throw Error(path, where(el, i) + ": cannot parse " + quote_token(b, e) + " as a list count");
+    }
+    return c;
+  };
+
+  for (std::size_t k = 0; k < v.index; ++k) {
+    const PlyElement& el = h.elements[k];
+    if (el.props.empty()) continue;  // records with no tokens: nothing to skip
+    for (std::uint64_t i = 0; i < el.count; ++i) {
+      for (const PlyProperty& prop : el.props) {
+        if (!cur.next(b, e)) throw truncated(el, i);
+        if (!prop.is_list) continue;
+        for (std::uint64_t c = list_count(el, i); c > 0; --c) {
+          if (!cur.next(b, e)) throw truncated(el, i);
+        }
+      }
+    }
+  }
+
+  const PlyElement& el = h.elements[v.index];
+  // Every record needs one token (>= 2 bytes with its separator) per property.
+  const std::size_t min_record = 2 * el.props.size();
+  if (el.count > (cur.remaining() + 1) / min_record) {
+    throw ply_truncated(path, el.count, cur.remaining());
+  }
+  const std::size_t n = static_cast<std::size_t>(el.count);
+  Cloud cloud;
+  cloud.points.resize(n);
+  if (v.id >= 0) cloud.ids.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    float xyz[3] = {0.0f, 0.0f, 0.0f};
+    for (std::size_t j = 0; j < el.props.size(); ++j) {
+      const PlyProperty& prop = el.props[j];
+      if (!cur.next(b, e)) throw truncated(el, i);
+      const int slot = static_cast<int>(j);
+      if (prop.is_list) {
+        for (std::uint64_t c = list_count(el, i); c > 0; --c) {
+          if (!cur.next(b, e)) throw truncated(el, i);
+        }
+      } else if (slot == v.x || slot == v.y || slot == v.z) {
+        float& out = xyz[slot == v.x ? 0 : slot == v.y ? 1 : 2];
+        bool ok = false;
+        if (prop.type == PlyType::f32) {
+          ok = parse_real_token(b, e, out);
+        } else {
+          double d = 0.0;
+          ok = parse_real_token(b, e, d);
+          out = to_float(d);
+        }
+        if (!ok) {
+          throw Error(path, where(el, i) + ": cannot parse " + quote_token(b, e) +
+                                " as a number (property " + prop.name + ")");
+        }
+      } else if (slot == v.id) {
+        std::int64_t id = 0;
+        if (!parse_int_token(b, e, id)) {
+          throw Error(path,
+                      where(el, i) + ": cannot parse " + quote_token(b, e) + " as an integer id");
+        }
+        if (id < 0) {
+          throw Error(path, where(el, i) + ": negative id " + std::to_string(id));
+        }
+        cloud.ids[i] = static_cast<std::uint64_t>(id);
+      }
+    }
+    cloud.points[i] = Point3f{xyz[0], xyz[1], xyz[2]};
+  }
+  return cloud;  // elements after vertex are never looked at
+}
+
+template <class T>
+void store_le(char* out, T value) noexcept {
+  unsigned char b[sizeof(T)];
+  std::memcpy(b, &value, sizeof(T));
+  if (!host_is_little_endian()) std::reverse(b, b + sizeof(T));
+  std::memcpy(out, b, sizeof(T));
+}
+
+}  // namespace detail
+
+// Reads the vertex positions (and ids, if present) of a PLY file. Throws io::Error on any problem
+// with the file; NaN/Inf coordinates are returned unchanged (see the header comment).
+inline Cloud read_ply(const std::string& path) {
+  const detail::FileBuffer buf = detail::read_file(path);
+  const detail::PlyHeader h = detail::parse_ply_header(path, buf.data(), buf.size());
+  const detail::PlyVertexLayout v = detail::locate_vertex(path, h);
+  if (h.format == detail::PlyFormat::ascii) {
+    return detail::read_ply_ascii(path, h, v, buf.data() + h.data_offset, buf.end());
+  }
+  return detail::read_ply_binary(path, h, v,
+                                 reinterpret_cast<const unsigned char*>(buf.data()) + h.data_offset,
+                                 buf.size() - h.data_offset);
+}
+
+// Writes "float x y z" (+ "uint id" when ids is given) as binary little-endian or ascii PLY.
+// ids must have one entry per point and each must fit in 32 bits. Atomic: temp file + rename.
+inline void write_ply(const std::string& path, const std::vector<Point3f>& pts,
+                      const std::vector<std::uint64_t>* ids = nullptr, bool binary = true) {
+  if (ids) {
+    if (ids->size() != pts.size()) {
+      throw Error(path, "write_ply: " + std::to_string(ids->size()) + " ids for " +
+                            std::to_string(pts.size()) + " points");
+    }
+    for (std::size_t i = 0; i < ids->size(); ++i) {
+      if ((*ids)[i] > 0xFFFFFFFFull) {
+        throw Error(path, "write_ply: id " + std::to_string((*ids)[i]) + " of point " +
+                              std::to_string(i) + " does not fit the 'uint' id property");
+      }
+    }
+  }
+  std::string header = "ply\nformat ";
+  header += binary ? "binary_little_endian 1.0\n" : "ascii 1.0\n";
+  header += "comment written by knnocc\nelement vertex " + std::to_string(pts.size()) +
+            "\nproperty float x\nproperty float y\nproperty float z\n";
+  if (ids) header += "property uint id\n";
+  header += "end_header\n";
+
+  detail::AtomicWriter out(path);
+  out.write(header);
+  if (binary) {
+    const std::size_t rec = ids ? 16 : 12;
+    std::vector<char> body(pts.size() * rec);
+    if (!ids && detail::host_is_little_endian()) {
+      if (!pts.empty()) std::memcpy(body.data(), pts.data(), body.size());
+    } else {
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        char* r = body.data() + i * rec;
+        detail::store_le(r, pts[i].x);
+        detail::store_le(r + 4, pts[i].y);
+        detail::store_le(r + 8, pts[i].z);
+        if (ids) detail::store_le(r + 12, static_cast<std::uint32_t>((*ids)[i]));
+      }
+    }
+    out.write(body.data(), body.size());
+  } else {
+    std::vector<char> chunk(1 << 16);
+    char* w = chunk.data();
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      if (chunk.data() + chunk.size() - w < 256) {  // room for one full line
+        out.write(chunk.data(), static_cast<std::size_t>(w - chunk.data()));
+        w = chunk.data();
+      }
+      char* const lim = chunk.data() + chunk.size();
+      w = detail::format_float_roundtrip(w, lim, pts[i].x);
+      *w++ = ' ';
+      w = detail::format_float_roundtrip(w, lim, pts[i].y);
+      *w++ = ' ';
+      w = detail::format_float_roundtrip(w, lim, pts[i].z);
+      if (ids) {
+        *w++ = ' ';
+        w = std::to_chars(w, lim, (*ids)[i]).ptr;
+      }
+      *w++ = '\n';
+    }
+    out.write(chunk.data(), static_cast<std::size_t>(w - chunk.data()));
+  }
+  out.commit();
+}
+
+}  // namespace knnocc::io

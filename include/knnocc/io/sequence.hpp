@@ -1,0 +1,100 @@
+#pragma once
+// A sequence folder: poses.txt (one sensor-to-world pose per line) plus clouds/NNNNNN.ply,
+// where the i-th cloud in name order belongs to the i-th pose line. Clouds are in the sensor
+// frame; use transform_to_world(pose(i), ...) to move them.
+
+#include <algorithm>
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "cloud.hpp"
+#include "error.hpp"
+#include "ply.hpp"
+#include "trajectory.hpp"
+
+namespace knnocc::io {
+
+// True if path is a directory holding a poses.txt file and a clouds/ directory. Never throws.
+inline bool is_sequence_dir(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path dir(path);
+  return fs::is_directory(dir, ec) && fs::is_regular_file(dir / "poses.txt", ec) &&
+         fs::is_directory(dir / "clouds", ec);
+}
+
+class Sequence {
+ public:
+  // Reads poses.txt and lists clouds/*.ply; the clouds themselves load lazily.
+  static Sequence open(const std::string& dir) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::path root(dir);
+    if (!fs::is_directory(root, ec)) throw Error(dir, "sequence folder does not exist");
+    const fs::path poses_file = root / "poses.txt";
+    if (!fs::is_regular_file(poses_file, ec)) {
+      throw Error(poses_file.string(), "missing poses.txt in sequence folder");
+    }
+    const fs::path cloud_dir = root / "clouds";
+    if (!fs::is_directory(cloud_dir, ec)) {
+      throw Error(cloud_dir.string(), "missing clouds/ folder in sequence folder");
+    }
+
+    Sequence seq;
+    seq.dir_ = dir;
+    seq.poses_ = read_poses(poses_file.string());
+    for (fs::directory_iterator it(cloud_dir, ec), end; !ec && it != end; it.increment(ec)) {
+      std::error_code type_ec;  // a file vanishing mid-listing is not a listing error
+      if (it->path().extension() == ".ply" && !it->is_directory(type_ec)) {
+        seq.clouds_.push_back(it->path().string());
+      }
+    }
+    if (ec) throw Error(cloud_dir.string(), "cannot list folder: " + ec.message());
+    // Directory order is arbitrary; zero-padded names make name order the pose order.
+    std::sort(seq.clouds_.begin(), seq.clouds_.end());
+
+    if (seq.clouds_.empty()) throw Error(cloud_dir.string(), "no .ply clouds in folder");
+    if (seq.clouds_.size() != seq.poses_.size()) {
+      throw Error(dir, "poses.txt has " + std::to_string(seq.poses_.size()) +
+                           " poses but clouds/ has " + std::to_string(seq.clouds_.size()) +
+                           " .ply files");
+    }
+    return seq;
+  }
+
+  std::size_t size() const noexcept { return clouds_.size(); }
+  const std::string& dir() const noexcept { return dir_; }
+
+  const Pose& pose(std::size_t i) const {
+    check(i);
+    return poses_[i];
+  }
+  const std::vector<Pose>& poses() const noexcept { return poses_; }
+
+  std::string cloud_path(std::size_t i) const {
+    check(i);
+    return clouds_[i];
+  }
+
+  // Cloud i in the sensor frame.
+  Cloud load_cloud(std::size_t i) const { return read_ply(cloud_path(i)); }
+
+ private:
+  Sequence() = default;
+
+  void check(std::size_t i) const {
+    if (i >= clouds_.size()) {
+      throw Error(dir_, "index " + std::to_string(i) + " out of range (sequence has " +
+                            std::to_string(clouds_.size()) + " clouds)");
+    }
+  }
+
+  std::string dir_;
+  std::vector<Pose> poses_;
+  std::vector<std::string> clouds_;
+};
+
+}  // namespace knnocc::io

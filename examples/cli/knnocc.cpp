@@ -1,0 +1,54 @@
+// knnocc: the command-line tool (the contract is in README.md, "Command-line tool").
+// Every failure is one line on stderr and exit status 2; outputs are written to a temporary
+// file and renamed, so a failed run leaves nothing half-written.
+
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include <knnocc/io/error.hpp>
+#include <knnocc/version.hpp>
+
+#include "args.hpp"
+#include "demo_command.hpp"
+#include "map_command.hpp"
+
+namespace {
+
+const char* kUsage = R"(usage: knnocc <command> [options]     (knnocc <command> --help for details)
+
+commands:
+  demo     the embedded default job: simulated LiDAR scans of a room through the OctoMap model
+  map      build an occupancy map from a sequence folder or a point file
+  version  print the version
+)";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    std::fputs(kUsage, argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  const std::string command = argv[1];
+  const std::vector<std::string> args(argv + 2, argv + argc);
+  try {
+    if (command == "map") return knnocc::cli::run_map(args);
+    if (command == "demo") return knnocc::cli::run_demo(args);
+    if (command == "version" || command == "--version") {
+      std::printf("knnocc %s\n", KNNOCC_VERSION_STRING);
+      return 0;
+    }
+    std::fprintf(stderr, "knnocc: unknown command '%s' (see knnocc --help)\n", command.c_str());
+    return 2;
+  } catch (const knnocc::cli::UsageError& e) {
+    std::fprintf(stderr, "knnocc %s: %s\n", command.c_str(), e.what());
+  } catch (const knnocc::io::Error& e) {
+    std::fprintf(stderr, "knnocc %s: %s\n", command.c_str(), e.what());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "knnocc %s: %s\n", command.c_str(), e.what());
+  }
+  return 2;
+}

@@ -144,9 +144,12 @@ int main(int argc, char** argv) {
   fs::path data = fs::path("..") / "shared" / "data";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--res" && i + 1 < argc) resolutions.push_back(std::atof(argv[++i]));
-    else if (a == "--repeat" && i + 1 < argc) repeat = std::max(1, std::atoi(argv[++i]));
-    else if (a == "--data" && i + 1 < argc) data = argv[++i];
+    if (a == "--res" && i + 1 < argc)
+      resolutions.push_back(std::atof(argv[++i]));
+    else if (a == "--repeat" && i + 1 < argc)
+      repeat = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--data" && i + 1 < argc)
+      data = argv[++i];
     else {
       std::fprintf(stderr, "usage: bench_insert [--res R]... [--repeat N] [--data DIR]\n");
       return 2;
@@ -191,6 +194,7 @@ int main(int argc, char** argv) {
   }
   struct rusage ru {};
   getrusage(RUSAGE_SELF, &ru);
-  std::printf("peak RSS of this process: %.1f MB (both libraries together)\n", ru.ru_maxrss / 1024.0);
+  std::printf("peak RSS of this process: %.1f MB (both libraries together)\n",
+              ru.ru_maxrss / 1024.0);
   return 0;
 }

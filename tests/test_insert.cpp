@@ -12,8 +12,8 @@
 
 #include "test_support.hpp"
 
-using knnocc::OcKey;
 using knnocc::OccupancyMap;
+using knnocc::OcKey;
 using knnocc::Point3f;
 using knnocc::WideKey;
 

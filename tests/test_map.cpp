@@ -8,8 +8,8 @@
 
 #include "test_support.hpp"
 
-using knnocc::OcKey;
 using knnocc::OccupancyMap;
+using knnocc::OcKey;
 using knnocc::WideKey;
 
 TEST_CASE("map.octomap_default_parameters") {
@@ -104,8 +104,8 @@ TEST_CASE_TEMPLATE("map.iteration_bbox_and_coarse_queries", Key, OcKey, WideKey)
     }
     std::size_t expect = 0, got = 0;
     for (auto& [k, v] : truth)
-      expect += k[0] >= lo[0] && k[0] <= hi[0] && k[1] >= lo[1] && k[1] <= hi[1] &&
-                k[2] >= lo[2] && k[2] <= hi[2];
+      expect += k[0] >= lo[0] && k[0] <= hi[0] && k[1] >= lo[1] && k[1] <= hi[1] && k[2] >= lo[2] &&
+                k[2] <= hi[2];
     map.for_each_voxel_in_bbox(lo, hi, [&](const Key& k, float v) {
       ++got;
       CHECK(truth.at(k) == v);
@@ -150,7 +150,8 @@ TEST_CASE("map.compaction_keeps_every_query") {
   std::vector<std::optional<float>> coarse_before;
   for (int d = 10; d <= 16; ++d)
     for (int i = 0; i < 40; ++i)
-      coarse_before.push_back(map.logodds_at_depth(OcKey(32768 + i, 32768 + 2 * i, 32768 + i % 5), d));
+      coarse_before.push_back(
+          map.logodds_at_depth(OcKey(32768 + i, 32768 + 2 * i, 32768 + i % 5), d));
 
   const std::size_t mem_before = map.memory_usage();
   const std::size_t compacted = map.compact();
@@ -170,7 +171,8 @@ TEST_CASE("map.compaction_keeps_every_query") {
   const float v0 = *map.logodds(k);
   map.update(k, 0.85f);
   CHECK(*map.logodds(k) == v0 + 0.85f);
-  CHECK(*map.logodds(OcKey(32768 + 2, 32768 + 1, 32768 + 1)) == before[OcKey(32768 + 2, 32768 + 1, 32768 + 1)]);
+  CHECK(*map.logodds(OcKey(32768 + 2, 32768 + 1, 32768 + 1)) ==
+        before[OcKey(32768 + 2, 32768 + 1, 32768 + 1)]);
 }
 
 TEST_CASE("map.change_detection_follows_octomap") {

@@ -18,8 +18,8 @@
 #include <octomap/OcTree.h>
 #endif
 
-using knnocc::OcKey;
 using knnocc::OccupancyMap;
+using knnocc::OcKey;
 using knnocc::Point3f;
 
 namespace {
@@ -52,7 +52,8 @@ knnocc::VoxelCounts insert_all(OccupancyMap<OcKey>& map, const std::vector<Scan>
                                double max_range = -1.0, bool discretize = false) {
   knnocc::ScanInserter<OcKey> inserter(map);
   const auto t0 = std::chrono::steady_clock::now();
-  for (const auto& s : scans) inserter.insert_point_cloud(s.origin, s.points, max_range, discretize);
+  for (const auto& s : scans)
+    inserter.insert_point_cloud(s.origin, s.points, max_range, discretize);
   MESSAGE("knnocc inserted " << scans.size() << " scan(s) in " << seconds_since(t0) << " s");
   return map.count_voxels();
 }

@@ -12,7 +12,8 @@ namespace knnocc::test {
 /// ../shared/data beside the project root, or "" when the folder is absent.
 inline std::string data_dir() {
 #ifdef KNNOCC_SOURCE_DIR
-  const std::filesystem::path p = std::filesystem::path(KNNOCC_SOURCE_DIR) / ".." / "shared" / "data";
+  const std::filesystem::path p =
+      std::filesystem::path(KNNOCC_SOURCE_DIR) / ".." / "shared" / "data";
   if (std::filesystem::is_directory(p)) return p.lexically_normal().string();
 #endif
   return {};

@@ -34,13 +34,13 @@ inline std::vector<Box> room() {
       {{10.0, -0.2, 0.0}, {10.2, 8.2, 3.0}},
       {{-0.2, -0.2, 0.0}, {10.2, 0.0, 3.0}},
       {{-0.2, 8.0, 0.0}, {10.2, 8.2, 3.0}},
-      {{6.0, 0.0, 0.0}, {6.2, 3.0, 3.0}},      // partition, door between y = 3 and 4.2
+      {{6.0, 0.0, 0.0}, {6.2, 3.0, 3.0}},  // partition, door between y = 3 and 4.2
       {{6.0, 4.2, 0.0}, {6.2, 8.0, 3.0}},
-      {{6.0, 3.0, 2.1}, {6.2, 4.2, 3.0}},      // lintel above the door
-      {{2.0, 2.0, 0.0}, {3.6, 3.0, 0.75}},     // table
-      {{4.5, 5.5, 0.0}, {4.9, 5.9, 3.0}},      // pillar
-      {{0.0, 6.6, 0.0}, {1.8, 8.0, 2.0}},      // cabinet
-      {{8.0, 1.0, 0.0}, {9.2, 2.0, 1.2}},      // crate in the second room
+      {{6.0, 3.0, 2.1}, {6.2, 4.2, 3.0}},   // lintel above the door
+      {{2.0, 2.0, 0.0}, {3.6, 3.0, 0.75}},  // table
+      {{4.5, 5.5, 0.0}, {4.9, 5.9, 3.0}},   // pillar
+      {{0.0, 6.6, 0.0}, {1.8, 8.0, 2.0}},   // cabinet
+      {{8.0, 1.0, 0.0}, {9.2, 2.0, 1.2}},   // crate in the second room
   };
 }
 
@@ -109,18 +109,23 @@ inline int run_demo(const std::vector<std::string>& argv) {
   const long seed = args.integer("--seed", 1);
 
   const auto boxes = demo::room();
-  const std::array<std::array<double, 3>, 8> poses = {{{1.0, 1.0, 1.2}, {3.0, 4.5, 1.2},
-                                                       {1.2, 5.5, 1.2}, {4.0, 7.0, 1.2},
-                                                       {5.0, 3.6, 1.2}, {7.5, 3.6, 1.2},
-                                                       {8.5, 6.5, 1.2}, {7.0, 1.0, 1.2}}};
+  const std::array<std::array<double, 3>, 8> poses = {{{1.0, 1.0, 1.2},
+                                                       {3.0, 4.5, 1.2},
+                                                       {1.2, 5.5, 1.2},
+                                                       {4.0, 7.0, 1.2},
+                                                       {5.0, 3.6, 1.2},
+                                                       {7.5, 3.6, 1.2},
+                                                       {8.5, 6.5, 1.2},
+                                                       {7.0, 1.0, 1.2}}};
   std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
   std::normal_distribution<double> noise(0.0, 0.01);
   constexpr double kPi = 3.14159265358979323846;
   constexpr double kRange = 12.0;
 
-  std::printf("knnocc demo: simulated 16-beam LiDAR in a 10 m x 8 m room, %zu scans, "
-              "OctoMap model at %g m (seed %ld)\n",
-              poses.size(), res, seed);
+  std::printf(
+      "knnocc demo: simulated 16-beam LiDAR in a 10 m x 8 m room, %zu scans, "
+      "OctoMap model at %g m (seed %ld)\n",
+      poses.size(), res, seed);
   const auto t0 = std::chrono::steady_clock::now();
   OccupancyMap<OcKey> map(res);
   ScanInserter<OcKey> inserter(map);
@@ -137,12 +142,12 @@ inline int run_demo(const std::vector<std::string>& argv) {
         const double t = demo::first_hit(boxes, o, d);
         if (!(t < kRange)) continue;  // no return
         const double r = t + noise(rng);
-        scan.push_back(Point3f{float(o[0] + r * d[0]), float(o[1] + r * d[1]),
-                               float(o[2] + r * d[2])});
+        scan.push_back(
+            Point3f{float(o[0] + r * d[0]), float(o[1] + r * d[1]), float(o[2] + r * d[2])});
       }
     }
-    points += inserter.insert_point_cloud(Point3f{float(o[0]), float(o[1]), float(o[2])}, scan)
-                  .points;
+    points +=
+        inserter.insert_point_cloud(Point3f{float(o[0]), float(o[1]), float(o[2])}, scan).points;
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -161,13 +166,15 @@ inline int run_demo(const std::vector<std::string>& argv) {
     else
       free_inside += demo::inside_solid(boxes, c, res);
   });
-  std::printf("check: %zu of %zu occupied voxels touch a real surface (%.1f %%); "
-              "%zu free voxels lie inside solid objects\n",
-              on_surface, counts.occupied, counts.occupied ? 100.0 * on_surface / counts.occupied : 0.0,
-              free_inside);
+  std::printf(
+      "check: %zu of %zu occupied voxels touch a real surface (%.1f %%); "
+      "%zu free voxels lie inside solid objects\n",
+      on_surface, counts.occupied, counts.occupied ? 100.0 * on_surface / counts.occupied : 0.0,
+      free_inside);
 
   // Top view at sensor height from coarse-depth queries (2x2x2 voxels per character).
-  std::printf("top view at z = 1.2 m, 2 voxels per character ('#' occupied, '.' free, ' ' unknown):\n");
+  std::printf(
+      "top view at z = 1.2 m, 2 voxels per character ('#' occupied, '.' free, ' ' unknown):\n");
   const int depth = OcKey::depth - 1;
   const double cell = g.node_size(depth);
   for (double y = 8.3 - cell / 2; y > -0.3; y -= cell) {

@@ -45,8 +45,9 @@ exit status: 0 success, 2 bad input (one line on stderr naming the file and the 
 }
 
 inline int run_map(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--input", "--res", "--model", "--max-range", "--crop", "--out-voxels", "--voxels"},
-                  {"--discretize"});
+  const Args args(
+      argv, {"--input", "--res", "--model", "--max-range", "--crop", "--out-voxels", "--voxels"},
+      {"--discretize"});
   if (args.help()) {
     std::fputs(map_help(), stdout);
     return 0;

@@ -88,7 +88,8 @@ class Grid {
     Key out;
     for (int i = 0; i < 3; ++i) {
       const std::int64_t v = (static_cast<std::int64_t>(key[i]) - Key::center) >> shift;
-      out[i] = static_cast<index_type>((v << shift) + (std::int64_t{1} << (shift - 1)) + Key::center);
+      out[i] =
+          static_cast<index_type>((v << shift) + (std::int64_t{1} << (shift - 1)) + Key::center);
     }
     return out;
   }

@@ -17,7 +17,7 @@ struct BasicKey {
   static_assert(Bits >= 4 && Bits <= 21, "knnocc::BasicKey: Bits must be in [4, 21]");
   using index_type = std::conditional_t<(Bits <= 16), std::uint16_t, std::uint32_t>;
 
-  static constexpr int depth = Bits;                        ///< tree depth (leaves at depth Bits)
+  static constexpr int depth = Bits;  ///< tree depth (leaves at depth Bits)
   static constexpr std::int64_t center = std::int64_t{1} << (Bits - 1);  ///< index of coordinate 0
   static constexpr std::int64_t extent = std::int64_t{1} << Bits;        ///< indices per axis
 

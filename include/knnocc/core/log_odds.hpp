@@ -12,6 +12,8 @@ inline float logodds(double probability) {
 }
 
 /// 1 - 1 / (1 + exp(l)).
-inline double probability(double logodds_value) { return 1.0 - 1.0 / (1.0 + std::exp(logodds_value)); }
+inline double probability(double logodds_value) {
+  return 1.0 - 1.0 / (1.0 + std::exp(logodds_value));
+}
 
 }  // namespace knnocc

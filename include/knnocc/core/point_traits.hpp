@@ -25,9 +25,9 @@ namespace detail {
 template <class P, class = void>
 struct has_xyz_members : std::false_type {};
 template <class P>
-struct has_xyz_members<P, std::void_t<decltype(std::declval<const P&>().x),
-                                      decltype(std::declval<const P&>().y),
-                                      decltype(std::declval<const P&>().z)>>
+struct has_xyz_members<
+    P, std::void_t<decltype(std::declval<const P&>().x), decltype(std::declval<const P&>().y),
+                   decltype(std::declval<const P&>().z)>>
     : std::bool_constant<std::is_arithmetic_v<std::decay_t<decltype(std::declval<const P&>().x)>>> {
 };
 
@@ -62,28 +62,41 @@ struct point_access {
                 "(see knnocc/core/point_traits.hpp).");
 
   static auto x(const P& p) {
-    if constexpr (user) return point_traits<P>::x(p);
-    else if constexpr (members) return p.x;
-    else if constexpr (eigen) return p(0);
-    else return p[0];
+    if constexpr (user)
+      return point_traits<P>::x(p);
+    else if constexpr (members)
+      return p.x;
+    else if constexpr (eigen)
+      return p(0);
+    else
+      return p[0];
   }
   static auto y(const P& p) {
-    if constexpr (user) return point_traits<P>::y(p);
-    else if constexpr (members) return p.y;
-    else if constexpr (eigen) return p(1);
-    else return p[1];
+    if constexpr (user)
+      return point_traits<P>::y(p);
+    else if constexpr (members)
+      return p.y;
+    else if constexpr (eigen)
+      return p(1);
+    else
+      return p[1];
   }
   static auto z(const P& p) {
-    if constexpr (user) return point_traits<P>::z(p);
-    else if constexpr (members) return p.z;
-    else if constexpr (eigen) return p(2);
-    else return p[2];
+    if constexpr (user)
+      return point_traits<P>::z(p);
+    else if constexpr (members)
+      return p.z;
+    else if constexpr (eigen)
+      return p(2);
+    else
+      return p[2];
   }
 };
 
 }  // namespace detail
 
-/// True when P can be used as a point (members, Eigen, std::array or a point_traits specialisation).
+/// True when P can be used as a point (members, Eigen, std::array or a point_traits
+/// specialisation).
 template <class P>
 inline constexpr bool is_point_v =
     detail::has_user_traits<P>::value || detail::has_xyz_members<P>::value ||
@@ -91,11 +104,17 @@ inline constexpr bool is_point_v =
 
 /// Coordinates of any supported point, in the point's own scalar type.
 template <class P>
-auto point_x(const P& p) { return detail::point_access<P>::x(p); }
+auto point_x(const P& p) {
+  return detail::point_access<P>::x(p);
+}
 template <class P>
-auto point_y(const P& p) { return detail::point_access<P>::y(p); }
+auto point_y(const P& p) {
+  return detail::point_access<P>::y(p);
+}
 template <class P>
-auto point_z(const P& p) { return detail::point_access<P>::z(p); }
+auto point_z(const P& p) {
+  return detail::point_access<P>::z(p);
+}
 
 /// The scalar type of a point's coordinates (float for Eigen::Vector3f, double for Vector3d, ...).
 template <class P>

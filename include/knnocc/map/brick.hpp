@@ -12,8 +12,8 @@
 
 namespace knnocc {
 
-inline constexpr int kBrickBits = 3;                       ///< log2 of the brick edge
-inline constexpr int kBrickEdge = 1 << kBrickBits;         ///< voxels per brick edge (8)
+inline constexpr int kBrickBits = 3;                ///< log2 of the brick edge
+inline constexpr int kBrickEdge = 1 << kBrickBits;  ///< voxels per brick edge (8)
 inline constexpr int kBrickVoxels = kBrickEdge * kBrickEdge * kBrickEdge;  ///< 512
 
 /// One bit per voxel of a brick.
@@ -65,10 +65,11 @@ struct BrickLayout {
     using I = typename Key::index_type;
     const auto l = static_cast<unsigned>(local);
     constexpr unsigned m = kBrickEdge - 1;
-    return Key(static_cast<I>((((brick >> (2 * coord_bits)) & coord_mask) << kBrickBits) | (l & m)),
-               static_cast<I>((((brick >> coord_bits) & coord_mask) << kBrickBits) |
-                              ((l >> kBrickBits) & m)),
-               static_cast<I>(((brick & coord_mask) << kBrickBits) | ((l >> (2 * kBrickBits)) & m)));
+    return Key(
+        static_cast<I>((((brick >> (2 * coord_bits)) & coord_mask) << kBrickBits) | (l & m)),
+        static_cast<I>((((brick >> coord_bits) & coord_mask) << kBrickBits) |
+                       ((l >> kBrickBits) & m)),
+        static_cast<I>(((brick & coord_mask) << kBrickBits) | ((l >> (2 * kBrickBits)) & m)));
   }
   /// First leaf key (lowest corner) of a brick, per axis.
   static std::array<std::int64_t, 3> origin_of(std::uint64_t brick) {

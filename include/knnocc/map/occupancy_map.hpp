@@ -35,9 +35,9 @@ namespace knnocc {
 
 /// Clamping and occupancy threshold of a map (OctoMap's defaults).
 struct OccupancyParams {
-  float clamp_min = logodds(0.1192);        ///< -2.00002789
-  float clamp_max = logodds(0.971);         ///< 3.51103067
-  float occupancy_threshold = logodds(0.5); ///< 0: occupied iff logodds >= threshold
+  float clamp_min = logodds(0.1192);         ///< -2.00002789
+  float clamp_max = logodds(0.971);          ///< 3.51103067
+  float occupancy_threshold = logodds(0.5);  ///< 0: occupied iff logodds >= threshold
 
   /// Throws std::invalid_argument (aborts without exceptions) unless min < threshold <= max.
   void validate() const {

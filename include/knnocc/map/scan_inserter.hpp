@@ -86,9 +86,10 @@ class ScanInserter {
       endpoints_.erase(std::unique(endpoints_.begin(), endpoints_.end()), endpoints_.end());
       for (const std::uint64_t packed : endpoints_) {
         const Key k = Key::unpack(packed);
-        integrate(o, Point3f{static_cast<float>(grid.index_to_coord(k[0])),
-                             static_cast<float>(grid.index_to_coord(k[1])),
-                             static_cast<float>(grid.index_to_coord(k[2]))},
+        integrate(o,
+                  Point3f{static_cast<float>(grid.index_to_coord(k[0])),
+                          static_cast<float>(grid.index_to_coord(k[1])),
+                          static_cast<float>(grid.index_to_coord(k[2]))},
                   max_range, st);
       }
     } else {
@@ -124,8 +125,7 @@ class ScanInserter {
       ++st.ray_keys;
       scratch_for(k).miss.set(BrickLayout<Key>::local_of(k));
     };
-    if (max_range < 0.0 ||
-        detail::octomap_norm(p.x - o.x, p.y - o.y, p.z - o.z) <= max_range) {
+    if (max_range < 0.0 || detail::octomap_norm(p.x - o.x, p.y - o.y, p.z - o.z) <= max_range) {
       Key k;
       if (!grid.point_to_key(p, k)) {
         ++st.out_of_range;  // OctoMap's ray check fails on the same endpoint
@@ -179,8 +179,8 @@ class ScanInserter {
 
   map_type* map_;
   Model model_;
-  detail::FlatIndex index_;            // brick coordinate -> scratch slot, this scan
-  std::vector<Scratch> scratch_;       // grows to the largest scan seen, then reused
+  detail::FlatIndex index_;       // brick coordinate -> scratch slot, this scan
+  std::vector<Scratch> scratch_;  // grows to the largest scan seen, then reused
   std::size_t used_ = 0;
   std::uint64_t last_coord_ = 0;
   std::uint32_t last_ = detail::FlatIndex::kNone;

@@ -23,8 +23,8 @@ enum class CastStatus { occupied, unknown, max_range, out_of_bounds, invalid };
 template <class Key>
 struct CastResult {
   CastStatus status = CastStatus::invalid;
-  Key key{};       ///< voxel where the walk stopped (valid unless status is invalid)
-  Point3f end{};   ///< centre of that voxel
+  Key key{};      ///< voxel where the walk stopped (valid unless status is invalid)
+  Point3f end{};  ///< centre of that voxel
   bool hit() const { return status == CastStatus::occupied; }
 };
 
@@ -86,8 +86,8 @@ CastResult<Key> cast_ray(const OccupancyMap<Key>& map, const Point3f& origin,
   const double max_sq = max_range * max_range;
   using I = typename Key::index_type;
   for (;;) {
-    const int dim = (t_max[0] < t_max[1]) ? (t_max[0] < t_max[2] ? 0 : 2)
-                                          : (t_max[1] < t_max[2] ? 1 : 2);
+    const int dim =
+        (t_max[0] < t_max[1]) ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
     if ((step[dim] < 0 && cur[dim] == 0) || (step[dim] > 0 && cur[dim] == Key::extent - 1)) {
       r.status = CastStatus::out_of_bounds;
       return r;

@@ -85,8 +85,8 @@ bool for_each_ray_key(const Grid<Key>& grid, const Point3f& origin, const Point3
 
   using I = typename Key::index_type;
   for (;;) {
-    const int dim = (t_max[0] < t_max[1]) ? (t_max[0] < t_max[2] ? 0 : 2)
-                                          : (t_max[1] < t_max[2] ? 1 : 2);
+    const int dim =
+        (t_max[0] < t_max[1]) ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
     cur[dim] += step[dim];
     t_max[dim] += t_delta[dim];
     if (cur[0] == stop[0] && cur[1] == stop[1] && cur[2] == stop[2]) return true;

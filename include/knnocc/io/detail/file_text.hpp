@@ -273,4 +273,3 @@ inline char* format_float_roundtrip(char* buf, char* buf_end, float v) {
 
 }  // namespace detail
 }  // namespace knnocc::io
-

@@ -1,0 +1,36 @@
+# Runs the knnocc tool once and checks what a user would see.
+#   -DTOOL=<path>            the knnocc executable
+#   -DARGS=a|b|c             its arguments, separated by '|'
+#   -DEXPECT_EXIT=<n>        required exit status
+#   -DSTDOUT_REGEX=<re>      optional: stdout must match
+#   -DSTDERR_REGEX=<re>      optional: stderr must match
+#   -DWRITE_FILE=<path> -DWRITE_CONTENT=<text>   optional: input file created first
+#   -DEXPECT_FILE=<path>     optional: must exist afterwards (removed first)
+#   -DNO_FILE=<path>         optional: must not exist afterwards, nor <path>.tmp (removed first)
+string(REPLACE "|" ";" _args "${ARGS}")
+foreach(_f IN ITEMS "${EXPECT_FILE}" "${NO_FILE}")
+  if(_f)
+    file(REMOVE "${_f}" "${_f}.tmp")
+  endif()
+endforeach()
+if(WRITE_FILE)
+  file(WRITE "${WRITE_FILE}" "${WRITE_CONTENT}")
+endif()
+execute_process(COMMAND "${TOOL}" ${_args}
+  RESULT_VARIABLE _rc OUTPUT_VARIABLE _out ERROR_VARIABLE _err)
+message(STATUS "exit ${_rc}\nstdout:\n${_out}\nstderr:\n${_err}")
+if(NOT "${_rc}" STREQUAL "${EXPECT_EXIT}")
+  message(FATAL_ERROR "expected exit status ${EXPECT_EXIT}, got ${_rc}")
+endif()
+if(DEFINED STDOUT_REGEX AND NOT _out MATCHES "${STDOUT_REGEX}")
+  message(FATAL_ERROR "stdout does not match: ${STDOUT_REGEX}")
+endif()
+if(DEFINED STDERR_REGEX AND NOT _err MATCHES "${STDERR_REGEX}")
+  message(FATAL_ERROR "stderr does not match: ${STDERR_REGEX}")
+endif()
+if(EXPECT_FILE AND NOT EXISTS "${EXPECT_FILE}")
+  message(FATAL_ERROR "expected output file ${EXPECT_FILE} was not written")
+endif()
+if(NO_FILE AND (EXISTS "${NO_FILE}" OR EXISTS "${NO_FILE}.tmp"))
+  message(FATAL_ERROR "${NO_FILE} (or its temporary) exists after a failed run")
+endif()

@@ -1,0 +1,47 @@
+// A warmed-up ScanInserter allocates nothing: counted with a replaced global operator new.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdlib>
+#include <new>
+#include <random>
+#include <vector>
+
+#include <knnocc/map/scan_inserter.hpp>
+
+#include "test_support.hpp"
+
+namespace {
+std::atomic<std::size_t> g_allocations{0};
+}
+
+void* operator new(std::size_t n) {
+  ++g_allocations;
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+TEST_CASE("insert.no_allocation_once_warmed_up") {
+  knnocc::test::Rng rng(17);
+  std::uniform_real_distribution<float> u(-5.f, 5.f);
+  std::vector<knnocc::Point3f> scan(20000);
+  for (auto& p : scan) p = {u(rng), u(rng), u(rng) * 0.3f};
+
+  knnocc::OccupancyMap<knnocc::OcKey> map(0.1);
+  knnocc::ScanInserter<knnocc::OcKey> inserter(map);
+  for (const bool discretize : {false, true}) {
+    const std::size_t cold = g_allocations.load();
+    inserter.insert_point_cloud(knnocc::Point3f{}, scan, -1.0, discretize);  // warm-up
+    if (!discretize) CHECK(g_allocations.load() > cold);  // the counter does see allocations
+    std::shuffle(scan.begin(), scan.end(), rng);
+    const std::size_t before = g_allocations.load();
+    const auto st = inserter.insert_point_cloud(knnocc::Point3f{}, scan, 4.0, discretize);
+    const std::size_t allocations = g_allocations.load() - before;
+    CAPTURE(discretize);
+    CHECK(st.ray_keys > 100000);
+    CHECK(allocations == 0);
+  }
+}

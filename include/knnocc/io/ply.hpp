@@ -537,7 +537,7 @@ inline void write_ply(const std::string& path, const std::vector<Point3f>& pts,
   if (ids) header += "property uint id\n";
   header += "end_header\n";
 
-  detail::AtomicWriter out(path);
+  AtomicFile out(path);
   out.write(header);
   if (binary) {
     const std::size_t rec = ids ? 16 : 12;

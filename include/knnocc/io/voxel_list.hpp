@@ -33,7 +33,7 @@ inline void write_voxel_list(const std::string& path, std::vector<VoxelRecord> v
     return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
   });
 
-  detail::AtomicWriter out(path);
+  AtomicFile out(path);
   // Formatted into a reused 1 MiB chunk: far cheaper than a stream, no 50 MB string either.
   std::vector<char> chunk(1 << 20);
   char* const lim = chunk.data() + chunk.size();

@@ -1,0 +1,33 @@
+#pragma once
+// The one place that knows nanoflann's version differences (Debian 12's 1.4.3, which reports
+// itself as 1.4.2 = 0x142, and 1.5+):
+//   - SearchParams was renamed SearchParameters in 1.5 (and gained a default argument);
+//   - 1.5 static_casts distances and indices to RESULTSET::DistanceType / IndexType, so our own
+//     result sets declare both;
+//   - the dynamic adaptor's index type parameter defaults to size_t (1.4) or uint32_t (1.5);
+//     we always pass it explicitly.
+// Everything else talks to the dynamic index only through findNeighbors with knnocc's result
+// sets (knn/point_index.hpp).
+
+// nanoflann 1.4.3's dynamic adaptor copies sub-trees whose bounding box is not yet set; GCC's
+// -Wmaybe-uninitialized reports that from inside the header, whatever the include path kind.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+#include <nanoflann.hpp>
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
+
+namespace knnocc::detail {
+
+#if NANOFLANN_VERSION >= 0x150
+using NanoflannSearchParams = nanoflann::SearchParameters;
+#else
+using NanoflannSearchParams = nanoflann::SearchParams;
+#endif
+
+inline constexpr int kNanoflannVersion = NANOFLANN_VERSION;
+
+}  // namespace knnocc::detail

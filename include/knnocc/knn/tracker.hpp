@@ -1,0 +1,492 @@
+#pragma once
+// KnnTracker: s_p for every map point and the normal distribution of the valid ones, kept up to
+// date as the map point cloud changes (paper section 3.2, eq 5-12, Alg. 2).
+//
+//   s_p   = mean Euclidean distance from p to its k nearest neighbours in the map cloud (p itself
+//           excluded; neighbours ordered by (distance, id), so the set is unique)
+//   valid = s_p < s_limit; the valid s_p form N, S, mu, sigma (stats/welford.hpp)
+//
+// apply(change) is Alg. 2: disappeared points leave the distribution (eq 9-11), new points join
+// it (eq 6-8), and every affected point (chosen by the AffectedPolicy, exact by default) is
+// erased with its old s and added with its new one; sigma = sqrt(S/N) (eq 12).
+//
+// Defined behaviour:
+//   - a point with fewer than k other points has no s (NaN) and is not in the distribution;
+//     once the cloud is large enough it is handled as a new point (paper section 4.3);
+//   - k larger than the cloud: every s is NaN, N == 0, mu == sigma == 0;
+//   - duplicate positions: distance 0 is a valid neighbour distance (s may be 0);
+//   - non-finite positions in a change set are skipped and counted;
+//   - adding an id that exists, or removing/moving one that does not, is a caller error
+//     (std::invalid_argument; abort without exceptions), detected before anything changes.
+// Rounding: Welford erase accumulates error; after more erases than max(1024, N) since the last
+// refresh, the distribution is recomputed exactly from the stored s values (amortised O(1)).
+//
+// Thread safety: const queries may run concurrently while apply() does not.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "../core/config.hpp"
+#include "../stats/welford.hpp"
+#include "affected.hpp"
+#include "change_set.hpp"
+#include "point_index.hpp"
+
+namespace knnocc {
+
+struct TrackerParams {
+  std::size_t k = 10;                                        ///< neighbours per point
+  double s_limit = std::numeric_limits<double>::infinity();  ///< valid iff s < s_limit
+  std::size_t compact_min_dead = 4096;  ///< compact when dead entries exceed this and the live
+
+  void validate() const {
+    if (k < 1 || k > 4096) detail::invalid_argument("k must be in [1, 4096]");
+    if (!(s_limit > 0.0)) detail::invalid_argument("s_limit must be > 0");
+  }
+};
+
+/// What one apply() did.
+struct TrackerUpdate {
+  std::size_t added = 0;     ///< new points (moved ones not included)
+  std::size_t removed = 0;   ///< disappeared points
+  std::size_t moved = 0;     ///< points with a new position
+  std::size_t affected = 0;  ///< existing points whose k-NN set changed
+  std::size_t skipped_nonfinite = 0;
+};
+
+template <class AffectedPolicy = ExactReverseKnn>
+class KnnTracker {
+ public:
+  using index_type = PointIndex::index_type;
+
+  explicit KnnTracker(TrackerParams params = {}, AffectedPolicy policy = {})
+      : params_(params), policy_(policy) {
+    params_.validate();
+  }
+
+  /// Alg. 2 for one change of the map point cloud.
+  TrackerUpdate apply(const ChangeSet& change) {
+    TrackerUpdate up;
+    validate(change);
+    new_.clear();
+    removed_.clear();
+    recompute_.clear();
+
+    // Disappeared points (and the old place of moved ones) leave tree and distribution.
+    auto take_out = [&](std::uint64_t id) {
+      const index_type i = id_to_index_.at(id);
+      id_to_index_.erase(id);
+      removed_.push_back(i);
+      erase_s(s_[i]);
+      for (std::size_t j = 0; j < count_[i]; ++j) drop_reverse(nbr(i)[j], i);
+      set_outlier(i, false);
+      hist_remove(i);
+      points_.remove(i);
+    };
+    for (const std::uint64_t id : change.removed) {
+      take_out(id);
+      ++up.removed;
+    }
+    std::vector<const IdPoint*> incoming;
+    for (const IdPoint& m : change.moved) {
+      if (!finite(m.p)) {
+        ++up.skipped_nonfinite;  // the point stays where it was
+        continue;
+      }
+      take_out(m.id);
+      incoming.push_back(&m);
+      ++up.moved;
+    }
+    for (const IdPoint& a : change.added) {
+      if (!finite(a.p)) {
+        ++up.skipped_nonfinite;
+        continue;
+      }
+      incoming.push_back(&a);
+      ++up.added;
+    }
+    for (const IdPoint* a : incoming) {
+      const index_type j = points_.append(a->id, a->p);
+      grow(j);
+      id_to_index_[a->id] = j;
+      new_.push_back(j);
+      is_new_[j] = 1;
+    }
+    points_.flush();
+
+    // Affected points, judged against the state before this change.
+    policy_.collect(*this, recompute_);
+
+    for (const index_type j : new_) {
+      points_.knn(j, params_.k, scratch_);
+      commit_neighbours(j);
+      add_s(s_[j]);
+    }
+    // A pair can be offered twice (radius query and outlier list): keep one of each.
+    std::sort(offers_.begin(), offers_.end());
+    offers_.erase(std::unique(offers_.begin(), offers_.end()), offers_.end());
+    for (const index_type q : recompute_) {
+      const double old_s = s_[q];
+      if (needs_query_[q])
+        points_.knn(q, params_.k, scratch_);
+      else
+        merge_offers(q);
+      if (commit_neighbours(q)) ++up.affected;
+      if (!(old_s == s_[q] || (std::isnan(old_s) && std::isnan(s_[q])))) {
+        erase_s(old_s);
+        add_s(s_[q]);
+      }
+    }
+    for (const index_type q : recompute_) marked_[q] = needs_query_[q] = 0;
+    offers_.clear();
+    for (const index_type j : new_) is_new_[j] = 0;
+    for (const index_type r : removed_) rev_[r].clear();
+
+    maintain();
+    return up;
+  }
+
+  // ---- queries -------------------------------------------------------------------------------
+
+  const TrackerParams& params() const { return params_; }
+  std::size_t size() const { return points_.live(); }
+  const RunningNormal& distribution() const { return dist_; }
+  std::size_t N() const { return dist_.count(); }
+  double mu() const { return dist_.mean(); }
+  double sigma() const { return dist_.sigma(); }
+
+  bool contains(std::uint64_t id) const { return id_to_index_.count(id) > 0; }
+  /// s of a point (NaN while it has fewer than k neighbours); invalid_argument for unknown ids.
+  double s(std::uint64_t id) const { return s_[index_of(id)]; }
+  const Point3d& position(std::uint64_t id) const { return points_.position(index_of(id)); }
+  /// The ids of a point's k nearest neighbours, nearest first.
+  std::vector<std::uint64_t> neighbours(std::uint64_t id) const {
+    const index_type i = index_of(id);
+    std::vector<std::uint64_t> out;
+    for (std::size_t j = 0; j < count_[i]; ++j) out.push_back(points_.id(nbr(i)[j]));
+    return out;
+  }
+  /// Calls f(id, position, s) for every live point.
+  template <class F>
+  void for_each_point(F&& f) const {
+    for (index_type i = 0; i < points_.size(); ++i)
+      if (points_.alive(i)) f(points_.id(i), points_.position(i), s_[i]);
+  }
+
+  /// Recomputes N, mu, S exactly from the stored s values.
+  void refresh_distribution() {
+    std::vector<double> valid;
+    valid.reserve(points_.live());
+    for (index_type i = 0; i < points_.size(); ++i)
+      if (points_.alive(i) && is_valid(s_[i])) valid.push_back(s_[i]);
+    dist_.recompute(valid);
+    erases_since_refresh_ = 0;
+  }
+
+  std::size_t memory_usage() const {
+    std::size_t bytes = points_.memory_usage() + nbr_.capacity() * sizeof(index_type) +
+                        count_.capacity() * sizeof(std::uint32_t) +
+                        (dk2_.capacity() + s_.capacity()) * sizeof(double) +
+                        dk_id_.capacity() * sizeof(std::uint64_t) +
+                        rev_.capacity() * sizeof(std::vector<index_type>) +
+                        outlier_pos_.capacity() * sizeof(index_type) + marked_.capacity() +
+                        needs_query_.capacity() + is_new_.capacity() + id_to_index_.size() * 32;
+    for (const auto& r : rev_) bytes += r.capacity() * sizeof(index_type);
+    return bytes;
+  }
+
+  // ---- policy interface (knn/affected.hpp) ---------------------------------------------------
+
+  const std::vector<index_type>& new_indices() const { return new_; }
+  const std::vector<index_type>& removed_indices() const { return removed_; }
+  const std::vector<index_type>& reverse_neighbours(index_type i) const { return rev_[i]; }
+  const std::vector<index_type>& outliers() const { return outliers_; }
+  double cut_radius2() const { return r_cut2_; }
+  std::size_t index_size() const { return points_.size(); }
+  bool alive(index_type i) const { return points_.alive(i); }
+  bool is_new(index_type i) const { return is_new_[i] != 0; }
+  bool incomplete(index_type i) const { return count_[i] < params_.k; }
+  double dk2(index_type i) const { return dk2_[i]; }
+  std::uint64_t dk_id(index_type i) const { return dk_id_[i]; }
+  const Point3d& position_at(index_type i) const { return points_.position(i); }
+  std::uint64_t id_at(index_type i) const { return points_.id(i); }
+  double s_at(index_type i) const { return s_[i]; }
+  void radius(const Point3d& c, double r2, std::vector<index_type>& out) {
+    points_.radius(c, r2, out);
+    ++radius_queries_;  // feeds the choice of r_cut (maintain())
+    radius_results_ += out.size();
+  }
+  bool marked(index_type i) const { return marked_[i] != 0; }
+  /// i's k-NN must be searched again (it may have lost a neighbour, or the policy cannot tell).
+  void mark(index_type i, std::vector<index_type>& out) {
+    needs_query_[i] = 1;
+    if (marked_[i]) return;
+    marked_[i] = 1;
+    out.push_back(i);
+  }
+  /// New point p beats i's k-th neighbour; unless i is also marked, its new k-NN are the best k
+  /// of its old ones and the points offered to it.
+  void offer(index_type i, index_type p, std::vector<index_type>& out) {
+    offers_.emplace_back(i, p);
+    if (marked_[i]) return;
+    marked_[i] = 1;
+    out.push_back(i);
+  }
+  /// s of point i against the current cloud, without storing anything.
+  double peek_s(index_type i) const {
+    std::vector<Neighbor> nb;
+    points_.knn(i, params_.k, nb);
+    return mean_distance(nb);
+  }
+
+ private:
+  static bool finite(const Point3d& p) {
+    return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+  }
+  bool is_valid(double s) const { return !std::isnan(s) && s < params_.s_limit; }
+  index_type index_of(std::uint64_t id) const {
+    auto it = id_to_index_.find(id);
+    if (it == id_to_index_.end())
+      detail::invalid_argument("unknown map point id " + std::to_string(id));
+    return it->second;
+  }
+  index_type* nbr(index_type i) { return &nbr_[static_cast<std::size_t>(i) * params_.k]; }
+  const index_type* nbr(index_type i) const {
+    return &nbr_[static_cast<std::size_t>(i) * params_.k];
+  }
+
+  double mean_distance(const std::vector<Neighbor>& nb) const {
+    if (nb.size() < params_.k) return std::numeric_limits<double>::quiet_NaN();
+    double sum = 0.0;
+    for (const Neighbor& n : nb) sum += std::sqrt(n.d2);
+    return sum / static_cast<double>(params_.k);
+  }
+
+  void validate(const ChangeSet& c) const {
+    std::unordered_set<std::uint64_t> seen;
+    for (const std::uint64_t id : c.removed)
+      if (!contains(id) || !seen.insert(id).second)
+        detail::invalid_argument("removed id " + std::to_string(id) +
+                                 " is not in the map (or listed twice)");
+    for (const IdPoint& m : c.moved)
+      if (!contains(m.id) || !seen.insert(m.id).second)
+        detail::invalid_argument("moved id " + std::to_string(m.id) +
+                                 " is not in the map (or listed twice)");
+    for (const IdPoint& a : c.added)
+      if (contains(a.id) || !seen.insert(a.id).second)
+        detail::invalid_argument("added id " + std::to_string(a.id) +
+                                 " is already in the map (or listed twice)");
+  }
+
+  void grow(index_type j) {
+    const std::size_t n = static_cast<std::size_t>(j) + 1;
+    nbr_.resize(n * params_.k);
+    count_.resize(n, 0);
+    dk2_.resize(n, 0.0);
+    dk_id_.resize(n, 0);
+    s_.resize(n, std::numeric_limits<double>::quiet_NaN());
+    rev_.resize(n);
+    outlier_pos_.resize(n, PointIndex::npos);
+    marked_.resize(n, 0);
+    needs_query_.resize(n, 0);
+    is_new_.resize(n, 0);
+    hist_bucket_.resize(n, -1);
+  }
+
+  void drop_reverse(index_type owner, index_type who) {
+    if (!points_.alive(owner)) return;
+    auto& r = rev_[owner];
+    auto it = std::find(r.begin(), r.end(), who);
+    if (it != r.end()) {
+      *it = r.back();
+      r.pop_back();
+    }
+  }
+
+  // Old k-NN of i plus the new points offered to it, best k by (d2, id): the exact new k-NN when
+  // none of the old ones was removed (ExactReverseKnn's insertion rule found every candidate).
+  void merge_offers(index_type i) {
+    scratch_.clear();
+    const Point3d& pi = points_.position(i);
+    auto push = [&](index_type j) {
+      scratch_.push_back(Neighbor{j, points_.id(j), dist2(pi, points_.position(j))});
+    };
+    for (std::size_t j = 0; j < count_[i]; ++j) push(nbr(i)[j]);
+    auto it = std::lower_bound(offers_.begin(), offers_.end(), std::make_pair(i, index_type{0}));
+    for (; it != offers_.end() && it->first == i; ++it) push(it->second);
+    std::sort(scratch_.begin(), scratch_.end(),
+              [](const Neighbor& a, const Neighbor& b) { return closer(a.d2, a.id, b.d2, b.id); });
+    if (scratch_.size() > params_.k) scratch_.resize(params_.k);
+  }
+
+  // Stores scratch_ as i's neighbours (with s, d_k, reverse lists, outlier state); returns true
+  // when the set changed.
+  bool commit_neighbours(index_type i) {
+    bool changed = scratch_.size() != count_[i];
+    for (std::size_t j = 0; !changed && j < scratch_.size(); ++j)
+      changed = nbr(i)[j] != scratch_[j].index;
+    if (changed) {
+      for (std::size_t j = 0; j < count_[i]; ++j) drop_reverse(nbr(i)[j], i);
+      for (std::size_t j = 0; j < scratch_.size(); ++j) {
+        nbr(i)[j] = scratch_[j].index;
+        rev_[scratch_[j].index].push_back(i);
+      }
+      count_[i] = static_cast<std::uint32_t>(scratch_.size());
+    }
+    hist_remove(i);
+    dk2_[i] = scratch_.empty() ? 0.0 : scratch_.back().d2;
+    dk_id_[i] = scratch_.empty() ? 0 : scratch_.back().id;
+    s_[i] = mean_distance(scratch_);  // eq 5's s for this point
+    hist_add(i);
+    set_outlier(i, incomplete(i) || dk2_[i] > r_cut2_);
+    return changed;
+  }
+
+  void add_s(double s) {
+    if (is_valid(s)) dist_.add(s);  // eq 6-8
+  }
+  void erase_s(double s) {
+    if (!is_valid(s)) return;
+    dist_.erase(s);  // eq 9-11
+    ++erases_since_refresh_;
+  }
+
+  // ---- outliers: points the insertion radius query cannot see --------------------------------
+  // The radius r_cut is a high quantile of d_k, picked from a log-scale histogram; complete points
+  // with d_k > r_cut and incomplete points are kept in `outliers_` and tested one by one.
+
+  static int bucket_of(double dk2) {
+    if (!(dk2 > 0.0)) return 0;
+    const int b = static_cast<int>(std::floor(2.0 * std::log2(dk2))) + 100;  // 4 per octave of d
+    return std::min(std::max(b, 1), kBuckets - 1);
+  }
+  static double bucket_top2(int b) { return b == 0 ? 0.0 : std::exp2((b - 100 + 1) / 2.0); }
+
+  void hist_add(index_type i) {
+    if (incomplete(i)) return;
+    hist_bucket_[i] = bucket_of(dk2_[i]);
+    ++hist_[static_cast<std::size_t>(hist_bucket_[i])];
+  }
+  void hist_remove(index_type i) {
+    if (hist_bucket_[i] < 0) return;
+    --hist_[static_cast<std::size_t>(hist_bucket_[i])];
+    hist_bucket_[i] = -1;
+  }
+  void set_outlier(index_type i, bool on) {
+    const bool is = outlier_pos_[i] != PointIndex::npos;
+    if (on == is) return;
+    if (on) {
+      outlier_pos_[i] = static_cast<index_type>(outliers_.size());
+      outliers_.push_back(i);
+    } else {
+      const index_type pos = outlier_pos_[i];
+      outliers_[pos] = outliers_.back();
+      outlier_pos_[outliers_[pos]] = pos;
+      outliers_.pop_back();
+      outlier_pos_[i] = PointIndex::npos;
+    }
+  }
+
+  // After each apply: keep the outlier list short, the distribution exact enough, the dataset
+  // free of piles of dead entries.
+  void maintain() {
+    // Each new point costs one radius query (its results) plus one test per outlier. Aim for as
+    // many outliers as the last radius queries returned on average, so the two costs balance.
+    std::size_t target = std::max<std::size_t>(32, points_.live() / 512);
+    if (radius_queries_ > 0)
+      target = std::min(std::max<std::size_t>(32, radius_results_ / radius_queries_),
+                        std::max<std::size_t>(32, points_.live() / 8));
+    radius_queries_ = radius_results_ = 0;
+    if (outliers_.size() > 2 * target + 16 || (outliers_.size() < target / 2 && r_cut2_ > 0.0)) {
+      std::size_t above = 0;
+      int b = kBuckets - 1;
+      while (b > 0 && above + hist_[static_cast<std::size_t>(b)] <= target)
+        above += hist_[static_cast<std::size_t>(b--)];
+      const double cut = bucket_top2(b);
+      if (cut != r_cut2_) {
+        r_cut2_ = cut;
+        for (index_type i = 0; i < points_.size(); ++i)
+          if (points_.alive(i)) set_outlier(i, incomplete(i) || dk2_[i] > r_cut2_);
+      }
+    }
+    if (erases_since_refresh_ > std::max<std::size_t>(1024, dist_.count())) refresh_distribution();
+    if (points_.dead() > params_.compact_min_dead && points_.dead() > points_.live()) compact();
+  }
+
+  void compact() {
+    const std::vector<index_type> remap = points_.compact();
+    const std::size_t n = points_.size(), k = params_.k;
+    std::vector<index_type> nbr(n * k);
+    std::vector<std::uint32_t> count(n);
+    std::vector<double> dk2(n), s(n);
+    std::vector<std::uint64_t> dk_id(n);
+    std::vector<std::vector<index_type>> rev(n);
+    std::vector<int> bucket(n);
+    for (std::size_t old = 0; old < remap.size(); ++old) {
+      const index_type i = remap[old];
+      if (i == PointIndex::npos) continue;
+      std::size_t c = 0;
+      for (std::size_t j = 0; j < count_[old]; ++j) {
+        const index_type m = remap[nbr_[old * k + j]];
+        if (m != PointIndex::npos) nbr[i * k + c++] = m;  // dead ones only under PaperAnnulus
+      }
+      count[i] = static_cast<std::uint32_t>(c);
+      dk2[i] = dk2_[old];
+      dk_id[i] = dk_id_[old];
+      s[i] = s_[old];
+      bucket[i] = hist_bucket_[old];
+      for (const index_type r : rev_[old])
+        if (remap[r] != PointIndex::npos) rev[i].push_back(remap[r]);
+    }
+    nbr_.swap(nbr);
+    count_.swap(count);
+    dk2_.swap(dk2);
+    dk_id_.swap(dk_id);
+    s_.swap(s);
+    rev_.swap(rev);
+    hist_bucket_.swap(bucket);
+    marked_.assign(n, 0);
+    needs_query_.assign(n, 0);
+    is_new_.assign(n, 0);
+    outlier_pos_.assign(n, PointIndex::npos);
+    outliers_.clear();
+    for (auto& [id, idx] : id_to_index_) idx = remap[idx];
+    for (index_type i = 0; i < n; ++i) set_outlier(i, incomplete(i) || dk2_[i] > r_cut2_);
+  }
+
+  static constexpr int kBuckets = 200;
+
+  TrackerParams params_;
+  AffectedPolicy policy_;
+  PointIndex points_;
+  std::unordered_map<std::uint64_t, index_type> id_to_index_;
+  // Per dataset index:
+  std::vector<index_type> nbr_;               // k neighbour indices each, nearest first
+  std::vector<std::uint32_t> count_;          // how many of them exist (< k: incomplete)
+  std::vector<double> dk2_;                   // squared distance of the k-th (last) neighbour
+  std::vector<std::uint64_t> dk_id_;          // id of the k-th neighbour
+  std::vector<double> s_;                     // eq 5's s, NaN when incomplete
+  std::vector<std::vector<index_type>> rev_;  // points that have this one among their k-NN
+  std::vector<index_type> outlier_pos_;
+  std::vector<std::uint8_t> marked_, needs_query_, is_new_;
+  std::vector<int> hist_bucket_;
+  // The distribution and the insertion search radius.
+  RunningNormal dist_;
+  std::size_t erases_since_refresh_ = 0;
+  std::vector<std::size_t> hist_ = std::vector<std::size_t>(kBuckets, 0);
+  std::vector<index_type> outliers_;
+  double r_cut2_ = 0.0;
+  std::size_t radius_queries_ = 0, radius_results_ = 0;
+  // Per apply():
+  std::vector<index_type> new_, removed_, recompute_;
+  std::vector<std::pair<index_type, index_type>> offers_;  // (point, new point it should consider)
+  std::vector<Neighbor> scratch_;
+};
+
+}  // namespace knnocc

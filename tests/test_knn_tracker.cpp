@@ -1,0 +1,295 @@
+// KnnTracker against a brute-force oracle: every point's k-NN set and s exactly, and the
+// distribution (N, mu, sigma) within 1e-9 relative, after every change set.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <unordered_map>
+#include <vector>
+
+#include <knnocc/knn/tracker.hpp>
+
+#include "test_support.hpp"
+
+using knnocc::ChangeSet;
+using knnocc::Point3d;
+
+namespace {
+
+using Cloud = std::map<std::uint64_t, Point3d>;
+
+struct Truth {
+  std::map<std::uint64_t, std::vector<std::uint64_t>> knn;
+  std::map<std::uint64_t, double> s;
+  std::size_t n = 0;
+  double mean = 0, sigma = 0;
+};
+
+// The definition itself: sort every other point by (dist2, id), take k, average the distances.
+Truth brute_force(const Cloud& cloud, std::size_t k, double s_limit) {
+  Truth t;
+  std::vector<std::pair<std::uint64_t, Point3d>> pts(cloud.begin(), cloud.end());
+  std::vector<knnocc::Neighbor> all;
+  std::vector<double> valid;
+  for (const auto& [id, p] : pts) {
+    all.clear();
+    for (const auto& [jd, q] : pts)
+      if (jd != id) all.push_back({0, jd, knnocc::dist2(q, p)});
+    const std::size_t m = std::min(k, all.size());
+    std::partial_sort(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(m), all.end(),
+                      [](const knnocc::Neighbor& a, const knnocc::Neighbor& b) {
+                        return knnocc::closer(a.d2, a.id, b.d2, b.id);
+                      });
+    auto& ids = t.knn[id];
+    double sum = 0;
+    for (std::size_t j = 0; j < m; ++j) {
+      ids.push_back(all[j].id);
+      sum += std::sqrt(all[j].d2);
+    }
+    const double s = m == k ? sum / static_cast<double>(k) : std::nan("");
+    t.s[id] = s;
+    if (!std::isnan(s) && s < s_limit) valid.push_back(s);
+  }
+  t.n = valid.size();
+  if (t.n) {
+    for (double v : valid) t.mean += v;
+    t.mean /= static_cast<double>(t.n);
+    double ss = 0;
+    for (double v : valid) ss += (v - t.mean) * (v - t.mean);
+    t.sigma = std::sqrt(ss / static_cast<double>(t.n));
+  }
+  return t;
+}
+
+bool rel_close(double a, double b, double tol) {
+  return std::fabs(a - b) <= tol * std::max(std::max(std::fabs(a), std::fabs(b)), 1e-12);
+}
+
+template <class Tracker>
+void expect_matches(const Tracker& tr, const Cloud& cloud) {
+  const Truth t = brute_force(cloud, tr.params().k, tr.params().s_limit);
+  REQUIRE(tr.size() == cloud.size());
+  std::size_t wrong_sets = 0, wrong_s = 0;
+  for (const auto& [id, p] : cloud) {
+    REQUIRE(tr.contains(id));
+    if (tr.neighbours(id) != t.knn.at(id)) ++wrong_sets;
+    const double a = tr.s(id), b = t.s.at(id);
+    if (!(a == b || (std::isnan(a) && std::isnan(b)))) ++wrong_s;
+  }
+  CHECK(wrong_sets == 0);
+  CHECK(wrong_s == 0);
+  CHECK(tr.N() == t.n);
+  CHECK(rel_close(tr.mu(), t.mean, 1e-9));
+  CHECK(rel_close(tr.sigma(), t.sigma, 1e-9));
+}
+
+// Random change sets mixing the hard cases: duplicates, tight clusters, far outliers, moves.
+class Scenario {
+ public:
+  explicit Scenario(std::uint64_t seed) : rng_(seed) {}
+
+  ChangeSet next(const Cloud& cloud, std::size_t adds, std::size_t removes, std::size_t moves) {
+    ChangeSet cs;
+    std::vector<std::uint64_t> ids;
+    for (const auto& [id, p] : cloud) ids.push_back(id);
+    std::shuffle(ids.begin(), ids.end(), rng_);
+    std::size_t used = 0;
+    for (std::size_t i = 0; i < removes && used < ids.size(); ++i)
+      cs.removed.push_back(ids[used++]);
+    for (std::size_t i = 0; i < moves && used < ids.size(); ++i)
+      cs.moved.push_back({ids[used++], point(cloud)});
+    for (std::size_t i = 0; i < adds; ++i) cs.added.push_back({next_id_++, point(cloud)});
+    return cs;
+  }
+
+ private:
+  Point3d point(const Cloud& cloud) {
+    const double kind = u_(rng_);
+    if (kind < 0.1 && !cloud.empty()) {  // exact duplicate of an existing point
+      auto it = cloud.begin();
+      std::advance(it, static_cast<long>(u_(rng_) * static_cast<double>(cloud.size())) %
+                           static_cast<long>(cloud.size()));
+      return it->second;
+    }
+    if (kind < 0.4) {  // tight cluster around one of three centres
+      const int c = static_cast<int>(u_(rng_) * 3);
+      return {c * 1.0 + 0.01 * g_(rng_), 0.5 + 0.01 * g_(rng_), -0.3 * c + 0.01 * g_(rng_)};
+    }
+    if (kind < 0.45) return {20 + 5 * u_(rng_), -30 * u_(rng_), 10 * u_(rng_)};  // outlier
+    if (kind < 0.55)  // on a grid: many equal distances (ties decided by id)
+      return {0.1 * std::floor(u_(rng_) * 10), 0.1 * std::floor(u_(rng_) * 10), 2.0};
+    return {3 * u_(rng_) - 1.5, 3 * u_(rng_) - 1.5, 3 * u_(rng_) - 1.5};
+  }
+
+  knnocc::test::Rng rng_;
+  std::uniform_real_distribution<double> u_{0.0, 1.0};
+  std::normal_distribution<double> g_{0.0, 1.0};
+  std::uint64_t next_id_ = 1000;
+};
+
+void apply_to(Cloud& cloud, const ChangeSet& cs) {
+  for (auto id : cs.removed) cloud.erase(id);
+  for (const auto& m : cs.moved) cloud[m.id] = m.p;
+  for (const auto& a : cs.added) cloud[a.id] = a.p;
+}
+
+}  // namespace
+
+TEST_CASE("knn_tracker.random_sequences_match_brute_force") {
+  for (const std::size_t k : {1u, 2u, 3u, 5u, 8u, 16u}) {
+    CAPTURE(k);
+    knnocc::TrackerParams params;
+    params.k = k;
+    params.s_limit = k % 2 ? 0.5 : std::numeric_limits<double>::infinity();
+    params.compact_min_dead = 50;  // exercise compaction often
+    knnocc::KnnTracker<> tracker(params);
+    Cloud cloud;
+    Scenario scenario(100 + k);
+    for (int step = 0; step < 25; ++step) {
+      CAPTURE(step);
+      const std::size_t adds = step == 0 ? 3 : (step < 5 ? 60 : 25);
+      const std::size_t removes = step < 3 ? 0 : 20, moves = step < 3 ? 0 : 6;
+      const ChangeSet cs = scenario.next(cloud, adds, removes, moves);
+      const auto up = tracker.apply(cs);
+      CHECK(up.added == cs.added.size());
+      CHECK(up.removed == cs.removed.size());
+      CHECK(up.moved == cs.moved.size());
+      apply_to(cloud, cs);
+      expect_matches(tracker, cloud);
+    }
+  }
+}
+
+TEST_CASE("knn_tracker.defined_edge_cases") {
+  knnocc::TrackerParams params;
+  params.k = 4;
+  knnocc::KnnTracker<> tr(params);
+  ChangeSet cs;
+  SUBCASE("k larger than the cloud: no s, empty distribution") {
+    for (std::uint64_t i = 0; i < 4; ++i) cs.added.push_back({i, {double(i), 0, 0}});
+    tr.apply(cs);
+    CHECK(std::isnan(tr.s(0)));
+    CHECK(tr.N() == 0);
+    CHECK(tr.mu() == 0.0);
+    CHECK(tr.sigma() == 0.0);
+    // One more point: everyone now has k neighbours and joins as new (section 4.3).
+    ChangeSet more;
+    more.added.push_back({9, {4, 0, 0}});
+    tr.apply(more);
+    CHECK(tr.N() == 5);
+    CHECK(tr.s(0) == doctest::Approx((1 + 2 + 3 + 4) / 4.0));
+  }
+  SUBCASE("all points identical: s = 0, sigma = 0") {
+    for (std::uint64_t i = 0; i < 10; ++i) cs.added.push_back({i, {1, 2, 3}});
+    tr.apply(cs);
+    CHECK(tr.s(5) == 0.0);
+    CHECK(tr.N() == 10);
+    CHECK(tr.sigma() == 0.0);
+    CHECK(tr.neighbours(5) == std::vector<std::uint64_t>{0, 1, 2, 3});  // ties by id
+  }
+  SUBCASE("non-finite positions are skipped and counted") {
+    cs.added.push_back({1, {std::nan(""), 0, 0}});
+    cs.added.push_back({2, {0, INFINITY, 0}});
+    cs.added.push_back({3, {0, 0, 0}});
+    const auto up = tr.apply(cs);
+    CHECK(up.skipped_nonfinite == 2);
+    CHECK(up.added == 1);
+    CHECK(tr.size() == 1);
+    CHECK_FALSE(tr.contains(1));
+  }
+  SUBCASE("caller errors are refused before anything changes") {
+    cs.added.push_back({1, {0, 0, 0}});
+    tr.apply(cs);
+    ChangeSet bad;
+    bad.removed.push_back(42);
+    CHECK_THROWS_AS(tr.apply(bad), std::invalid_argument);
+    ChangeSet dup;
+    dup.added.push_back({1, {1, 1, 1}});
+    CHECK_THROWS_AS(tr.apply(dup), std::invalid_argument);
+    CHECK(tr.size() == 1);
+    CHECK(tr.position(1).x == 0.0);
+  }
+  SUBCASE("removing everything empties the distribution exactly") {
+    for (std::uint64_t i = 0; i < 30; ++i) cs.added.push_back({i, {0.1 * double(i), 0, 0}});
+    tr.apply(cs);
+    CHECK(tr.N() == 30);
+    ChangeSet all;
+    for (std::uint64_t i = 0; i < 30; ++i) all.removed.push_back(i);
+    tr.apply(all);
+    CHECK(tr.size() == 0);
+    CHECK(tr.N() == 0);
+    CHECK(tr.mu() == 0.0);
+  }
+  CHECK_THROWS_AS(knnocc::KnnTracker<>(knnocc::TrackerParams{0}), std::invalid_argument);
+}
+
+TEST_CASE("knn_tracker.paper_annulus_misses_affected_points") {
+  // Two dense clusters 4 m apart and a lone point between them whose k-NN reach into the left
+  // cluster. Points added to the left cluster change the lone point's k-NN, but Alg. 1's annulus
+  // stops as soon as one ring of the cluster is unchanged, long before it reaches 1.9 m.
+  knnocc::TrackerParams params;
+  params.k = 4;
+  knnocc::KnnTracker<> exact(params);
+  knnocc::KnnTracker<knnocc::PaperAnnulus> paper(params, knnocc::PaperAnnulus{0.05, 3.0});
+  knnocc::test::Rng rng(5);
+  std::normal_distribution<double> g(0.0, 0.05);
+  ChangeSet cs;
+  std::uint64_t id = 0;
+  for (int i = 0; i < 200; ++i) cs.added.push_back({id++, {g(rng), g(rng), g(rng)}});
+  for (int i = 0; i < 200; ++i) cs.added.push_back({id++, {4 + g(rng), g(rng), g(rng)}});
+  cs.added.push_back({id++, {2.0, 0.0, 0.0}});
+  exact.apply(cs);
+  paper.apply(cs);
+  Cloud cloud;
+  apply_to(cloud, cs);
+  std::size_t missed_total = 0;
+  for (int step = 0; step < 5; ++step) {
+    ChangeSet more;
+    for (int i = 0; i < 4; ++i) more.added.push_back({id++, {0.3 + 0.05 * step + 0.01 * i, 0, 0}});
+    exact.apply(more);
+    paper.apply(more);
+    apply_to(cloud, more);
+    const Truth t = brute_force(cloud, params.k, params.s_limit);
+    std::size_t missed = 0;
+    for (const auto& [pid, s] : t.s) missed += !(paper.s(pid) == s);
+    missed_total += missed;
+    expect_matches(exact, cloud);
+  }
+  MESSAGE("PaperAnnulus left " << missed_total << " affected points with a stale s over 5 steps");
+  CHECK(missed_total > 0);
+}
+
+TEST_CASE("knn_tracker.change_set_builders") {
+  std::unordered_map<std::uint64_t, Point3d> a{{1, {0, 0, 0}}, {2, {1, 0, 0}}, {3, {2, 0, 0}}};
+  std::unordered_map<std::uint64_t, Point3d> b{{2, {1, 0, 0}}, {3, {2, 0.5, 0}}, {4, {5, 0, 0}}};
+  const ChangeSet cs = knnocc::diff_by_id(a, b);
+  REQUIRE(cs.added.size() == 1);
+  CHECK(cs.added[0].id == 4);
+  CHECK(cs.removed == std::vector<std::uint64_t>{1});
+  REQUIRE(cs.moved.size() == 1);
+  CHECK(cs.moved[0].id == 3);
+  CHECK(knnocc::diff_by_id(a, b, 1.0).moved.empty());  // within tolerance
+
+  knnocc::SpatialChangeDetector det(0.5);
+  const std::vector<Point3d> c1 = {{0.1, 0.1, 0.1}, {0.2, 0.1, 0.1}, {3, 3, 3}};
+  const ChangeSet first = det.update(c1);
+  CHECK(first.added.size() == 3);
+  CHECK(first.removed.empty());
+  // Voxel of (3,3,3) empties; a new voxel appears; the first voxel stays with its old points.
+  const std::vector<Point3d> c2 = {{0.15, 0.1, 0.1}, {7, 0, 0}, {7.1, 0, 0}};
+  const ChangeSet second = det.update(c2);
+  REQUIRE(second.added.size() == 2);
+  CHECK(second.added[0].id == 3);
+  CHECK(second.added[0].p.x == 7.0);
+  CHECK(second.removed == std::vector<std::uint64_t>{2});
+  // Feeding the tracker the detector's changes keeps a consistent cloud.
+  knnocc::TrackerParams params;
+  params.k = 1;
+  knnocc::KnnTracker<> tr(params);
+  tr.apply(first);
+  tr.apply(second);
+  CHECK(tr.size() == 4);
+  CHECK(tr.s(3) == doctest::Approx(0.1));
+}

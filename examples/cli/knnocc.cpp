@@ -14,6 +14,7 @@
 #include "args.hpp"
 #include "demo_command.hpp"
 #include "map_command.hpp"
+#include "track_command.hpp"
 
 namespace {
 
@@ -22,6 +23,7 @@ const char* kUsage = R"(usage: knnocc <command> [options]     (knnocc <command> 
 commands:
   demo     the embedded default job: simulated LiDAR scans of a room through the OctoMap model
   map      build an occupancy map from a sequence folder or a point file
+  track    follow s_p and its normal distribution over a keyframe sequence (k-NN tracker)
   version  print the version
 )";
 
@@ -37,6 +39,7 @@ int main(int argc, char** argv) {
   try {
     if (command == "map") return knnocc::cli::run_map(args);
     if (command == "demo") return knnocc::cli::run_demo(args);
+    if (command == "track") return knnocc::cli::run_track(args);
     if (command == "version" || command == "--version") {
       std::printf("knnocc %s\n", KNNOCC_VERSION_STRING);
       return 0;

@@ -143,7 +143,8 @@ TEST_CASE("knn_tracker.random_sequences_match_brute_force") {
     knnocc::TrackerParams params;
     params.k = k;
     params.s_limit = k % 2 ? 0.5 : std::numeric_limits<double>::infinity();
-    params.compact_min_dead = 50;  // exercise compaction often
+    params.compact_min_dead = 50;           // exercise compaction often
+    params.rebuild_min = 8 + 40 * (k % 3);  // and static-tree rebuilds, at varying sizes
     knnocc::KnnTracker<> tracker(params);
     Cloud cloud;
     Scenario scenario(100 + k);

@@ -5,9 +5,9 @@
 //
 // ExactReverseKnn (default) is exact, with neighbours ordered by (distance, id):
 //   - inserting p changes q's k-NN iff (d(q,p), id_p) < (d_k(q), id_k(q)), or q has fewer than k
-//     neighbours; candidates come from one radius query of radius r_cut around p plus the short
-//     list of points whose d_k exceeds r_cut (outliers) or who lack neighbours. Such a q is
-//     offered p: its new k-NN are the best k of its old ones and its offers, no query needed;
+//     neighbours, i.e. iff p falls in q's k-NN ball; the candidates are the balls registered
+//     where p falls (knn/ball_grid.hpp). Such a q is offered p: its new k-NN are the best k of
+//     its old ones and its offers, no query needed;
 //   - removing p changes q's k-NN iff p is one of q's k neighbours: q is in p's reverse list.
 // PaperAnnulus is the paper's Alg. 1 as written: grow a ball around each new/disappeared point by
 // dr, recompute the points of each new annulus, stop when none of them changed or r >= s_max.
@@ -40,9 +40,8 @@ struct ExactReverseKnn {
         if (t.incomplete(q) || closer(dist2(t.position_at(q), pp), pid, t.dk2(q), t.dk_id(q)))
           t.offer(q, p, out);
       };
-      t.radius(pp, t.cut_radius2(), candidates);
+      t.ball_candidates(pp, candidates);
       for (const std::uint32_t q : candidates) test(q);
-      for (const std::uint32_t q : t.outliers()) test(q);
     }
   }
 };

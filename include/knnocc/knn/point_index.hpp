@@ -1,9 +1,12 @@
 #pragma once
-// PointIndex: the map point cloud with stable 64-bit ids, over nanoflann's dynamic KD-tree.
+// PointIndex: the map point cloud with stable 64-bit ids, searched with nanoflann.
 //
 // The dataset is append-only: a point added (or moved) gets a new dataset index, a removed index
-// is only marked dead in the tree (nanoflann's lazy removePoint) and never reused, and compact()
-// rebuilds dataset and tree from the live points when dead entries pile up.
+// is only marked dead (nanoflann's lazy removePoint in the dynamic tree, a flag the collectors
+// check in the static one) and never reused, and compact() rebuilds dataset and trees from the
+// live points when dead entries pile up. Two trees: a static KD-tree over the bulk (rebuilt when
+// the recent points outgrow a quarter of it) and nanoflann's dynamic KD-tree
+// (KDTreeSingleIndexDynamicAdaptor) over the points added since.
 //
 // Neighbour order is (squared distance, id): ties are broken by the smaller id, so every k-NN
 // set is unique and equals the brute-force one. Squared distances come from one function,
@@ -45,12 +48,13 @@ inline bool closer(double d2a, std::uint64_t ida, double d2b, std::uint64_t idb)
 
 namespace detail {
 
-// nanoflann's view of the dataset.
+// nanoflann's view of a slice [first, first + count) of the dataset, in local indices.
 struct PointCloudAdaptor {
   const std::vector<Point3d>* pts = nullptr;
-  std::size_t kdtree_get_point_count() const { return pts->size(); }
+  std::size_t first = 0, count = 0;
+  std::size_t kdtree_get_point_count() const { return count; }
   double kdtree_get_pt(std::size_t i, std::size_t dim) const {
-    const Point3d& p = (*pts)[i];
+    const Point3d& p = (*pts)[first + i];
     return dim == 0 ? p.x : (dim == 1 ? p.y : p.z);
   }
   template <class Bbox>
@@ -59,7 +63,7 @@ struct PointCloudAdaptor {
   }
 };
 
-// The tree's metric is dist2() itself, so the tree and brute force agree to the last bit.
+// The trees' metric is dist2() itself, so the trees and brute force agree to the last bit.
 struct Dist2Metric {
   using ElementType = double;
   using DistanceType = double;
@@ -67,7 +71,7 @@ struct Dist2Metric {
   explicit Dist2Metric(const PointCloudAdaptor& d) : data(d) {}
   template <class I>
   double evalMetric(const double* a, I b, std::size_t) const {
-    return dist2(Point3d{a[0], a[1], a[2]}, (*data.pts)[static_cast<std::size_t>(b)]);
+    return dist2(Point3d{a[0], a[1], a[2]}, (*data.pts)[data.first + static_cast<std::size_t>(b)]);
   }
   template <class U, class V>
   double accum_dist(const U a, const V b, std::size_t) const {
@@ -88,15 +92,18 @@ class KnnCollector {
   using IndexType = std::uint32_t;
 
   KnnCollector(std::size_t k, std::uint32_t skip, const std::vector<std::uint64_t>& ids,
-               std::vector<Neighbor>& out)
-      : k_(k), skip_(skip), ids_(ids), out_(out) {
+               const std::vector<std::uint8_t>& alive, std::vector<Neighbor>& out)
+      : k_(k), skip_(skip), ids_(ids), alive_(alive), out_(out) {
     out_.clear();
   }
+  std::uint32_t offset = 0;  ///< added to the local indices a tree reports
   bool full() const { return out_.size() == k_; }
   double worstDist() const { return worst_; }
-  bool addPoint(double d2, std::uint32_t index) {
+  bool addPoint(double d2, std::uint32_t local) {
+    const std::uint32_t index = local + offset;
     if (index == skip_ || k_ == 0) return true;
     if (full() && d2 > out_.back().d2) return true;  // cheap reject before touching ids_
+    if (!alive_[index]) return true;                 // removed from the static base tree
     const std::uint64_t id = ids_[index];
     if (full()) {
       if (!closer(d2, id, out_.back().d2, out_.back().id)) return true;
@@ -115,6 +122,7 @@ class KnnCollector {
   std::size_t k_;
   std::uint32_t skip_;
   const std::vector<std::uint64_t>& ids_;
+  const std::vector<std::uint8_t>& alive_;
   std::vector<Neighbor>& out_;
   double worst_ = std::numeric_limits<double>::max();  // what nanoflann may still offer
 };
@@ -124,18 +132,22 @@ class RadiusCollector {
  public:
   using DistanceType = double;
   using IndexType = std::uint32_t;
-  RadiusCollector(double radius2, std::vector<std::uint32_t>& out) : r2_(radius2), out_(out) {
+  RadiusCollector(double radius2, const std::vector<std::uint8_t>& alive,
+                  std::vector<std::uint32_t>& out)
+      : r2_(radius2), alive_(alive), out_(out) {
     out_.clear();
   }
+  std::uint32_t offset = 0;  ///< added to the local indices a tree reports
   bool full() const { return true; }
   double worstDist() const { return admit_equal(r2_); }
-  bool addPoint(double d2, std::uint32_t index) {
-    if (d2 <= r2_) out_.push_back(index);
+  bool addPoint(double d2, std::uint32_t local) {
+    if (d2 <= r2_ && alive_[local + offset]) out_.push_back(local + offset);
     return true;
   }
 
  private:
   double r2_;
+  const std::vector<std::uint8_t>& alive_;
   std::vector<std::uint32_t>& out_;
 };
 
@@ -146,11 +158,13 @@ class PointIndex {
   using index_type = std::uint32_t;
   static constexpr index_type npos = ~index_type{0};
 
-  PointIndex() { rebuild_tree(); }
+  /// rebuild_min: the dynamic tree may hold this many points before the static one is rebuilt
+  /// (it is always allowed a quarter of the static tree's size).
+  explicit PointIndex(std::size_t rebuild_min = 4096) : rebuild_min_(rebuild_min) { rebuild(); }
   PointIndex(const PointIndex&) = delete;
   PointIndex& operator=(const PointIndex&) = delete;
 
-  /// Appends a point; it joins the tree at the next flush().
+  /// Appends a point; it joins the search structure at the next flush().
   index_type append(std::uint64_t id, const Point3d& p) {
     pts_.push_back(p);
     ids_.push_back(id);
@@ -158,10 +172,18 @@ class PointIndex {
     ++live_;
     return static_cast<index_type>(pts_.size() - 1);
   }
-  /// Adds every point appended since the last flush to the tree.
+  /// Makes every point appended since the last flush searchable.
   void flush() {
-    if (in_tree_ < pts_.size())
-      tree_->addPoints(static_cast<index_type>(in_tree_), static_cast<index_type>(pts_.size() - 1));
+    if (in_tree_ == pts_.size()) return;
+    // The static base tree searches several times faster than nanoflann's dynamic forest;
+    // rebuild it once the recent points outgrow a quarter of it (amortised O(log n) per point).
+    if (pts_.size() - base_.count > std::max(rebuild_min_, base_.count / 4)) {
+      rebuild();
+      return;
+    }
+    recent_.count = pts_.size() - recent_.first;
+    recent_tree_->addPoints(static_cast<index_type>(in_tree_ - recent_.first),
+                            static_cast<index_type>(recent_.count - 1));
     in_tree_ = pts_.size();
   }
   /// Marks a point dead (never reused).
@@ -169,7 +191,8 @@ class PointIndex {
     if (!alive_[i]) return;
     alive_[i] = 0;
     --live_;
-    if (i < in_tree_) tree_->removePoint(i);
+    // The dynamic tree forgets it; the static base skips dead points when they are offered.
+    if (i >= recent_.first && i < in_tree_) recent_tree_->removePoint(i - recent_.first);
   }
 
   std::size_t size() const { return pts_.size(); }  ///< dataset entries, dead ones included
@@ -182,16 +205,16 @@ class PointIndex {
 
   /// The k nearest live points to point `self` (itself excluded), by (d2, id).
   void knn(index_type self, std::size_t k, std::vector<Neighbor>& out) const {
-    detail::KnnCollector c(k, self, ids_, out);
+    detail::KnnCollector c(k, self, ids_, alive_, out);
     search(c, pts_[self]);
   }
   /// Live points within squared distance radius2 of `centre` (inclusive), any order.
   void radius(const Point3d& centre, double radius2, std::vector<index_type>& out) const {
-    detail::RadiusCollector c(radius2, out);
+    detail::RadiusCollector c(radius2, alive_, out);
     search(c, centre);
   }
 
-  /// Rebuilds dataset and tree from the live points. Returns old index -> new index (npos for
+  /// Rebuilds dataset and trees from the live points. Returns old index -> new index (npos for
   /// dead ones) so callers can remap what they keep per index.
   std::vector<index_type> compact() {
     std::vector<index_type> remap(pts_.size(), npos);
@@ -209,40 +232,60 @@ class PointIndex {
     ids_.swap(ids);
     alive_.assign(pts_.size(), 1);
     live_ = pts_.size();
-    rebuild_tree();
+    rebuild();
     return remap;
   }
 
   std::size_t memory_usage() const {
-    // The tree keeps one index per point per level group plus nodes; ~ 2 indices per point is a
-    // fair estimate for nanoflann's logarithmic forest with leaves of 10.
+    // Trees: one index per point plus nodes (~ 1 node per 5 points with leaves of 10), and the
+    // dynamic forest's per-point tree number.
     return pts_.capacity() * sizeof(Point3d) + ids_.capacity() * sizeof(std::uint64_t) +
-           alive_.capacity() + pts_.size() * (sizeof(int) + 2 * sizeof(index_type) + 8);
+           alive_.capacity() + pts_.size() * (sizeof(index_type) + 16) +
+           recent_.count * sizeof(int);
   }
 
  private:
-  using Tree = nanoflann::KDTreeSingleIndexDynamicAdaptor<detail::Dist2Metric,
-                                                          detail::PointCloudAdaptor, 3, index_type>;
+  using StaticTree = nanoflann::KDTreeSingleIndexAdaptor<detail::Dist2Metric,
+                                                         detail::PointCloudAdaptor, 3, index_type>;
+  using DynamicTree =
+      nanoflann::KDTreeSingleIndexDynamicAdaptor<detail::Dist2Metric, detail::PointCloudAdaptor, 3,
+                                                 index_type>;
 
   template <class Collector>
   void search(Collector& c, const Point3d& q) const {
     const double v[3] = {q.x, q.y, q.z};
-    tree_->findNeighbors(c, v, detail::NanoflannSearchParams());
+    if (base_.count) {
+      c.offset = 0;
+      base_tree_->findNeighbors(c, v, detail::NanoflannSearchParams());
+    }
+    if (recent_.count) {
+      c.offset = static_cast<index_type>(recent_.first);
+      recent_tree_->findNeighbors(c, v, detail::NanoflannSearchParams());
+    }
   }
 
-  void rebuild_tree() {
-    adaptor_.pts = &pts_;
-    tree_ = std::make_unique<Tree>(3, adaptor_, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  // Everything appended so far goes into a new static base tree; the dynamic tree starts empty.
+  void rebuild() {
+    base_ = {&pts_, 0, pts_.size()};
+    base_tree_.reset();
+    if (base_.count)
+      base_tree_ =
+          std::make_unique<StaticTree>(3, base_, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+    recent_ = {&pts_, pts_.size(), 0};
+    recent_tree_ =
+        std::make_unique<DynamicTree>(3, recent_, nanoflann::KDTreeSingleIndexAdaptorParams(10));
     in_tree_ = pts_.size();
   }
 
+  std::size_t rebuild_min_;
   std::vector<Point3d> pts_;
   std::vector<std::uint64_t> ids_;
   std::vector<std::uint8_t> alive_;
   std::size_t live_ = 0;
-  std::size_t in_tree_ = 0;
-  detail::PointCloudAdaptor adaptor_;
-  std::unique_ptr<Tree> tree_;
+  std::size_t in_tree_ = 0;  // dataset entries already searchable
+  detail::PointCloudAdaptor base_, recent_;
+  std::unique_ptr<StaticTree> base_tree_;     // entries [0, base_.count)
+  std::unique_ptr<DynamicTree> recent_tree_;  // entries [recent_.first, in_tree_), local indices
 };
 
 }  // namespace knnocc

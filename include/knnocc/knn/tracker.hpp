@@ -35,6 +35,7 @@
 #include "../core/config.hpp"
 #include "../stats/welford.hpp"
 #include "affected.hpp"
+#include "ball_grid.hpp"
 #include "change_set.hpp"
 #include "point_index.hpp"
 
@@ -43,7 +44,8 @@ namespace knnocc {
 struct TrackerParams {
   std::size_t k = 10;                                        ///< neighbours per point
   double s_limit = std::numeric_limits<double>::infinity();  ///< valid iff s < s_limit
-  std::size_t compact_min_dead = 4096;  ///< compact when dead entries exceed this and the live
+  std::size_t compact_min_dead = 4096;  ///< compact when dead entries exceed this and live ones
+  std::size_t rebuild_min = 4096;       ///< see PointIndex: when the static KD-tree is rebuilt
 
   void validate() const {
     if (k < 1 || k > 4096) detail::invalid_argument("k must be in [1, 4096]");
@@ -66,7 +68,7 @@ class KnnTracker {
   using index_type = PointIndex::index_type;
 
   explicit KnnTracker(TrackerParams params = {}, AffectedPolicy policy = {})
-      : params_(params), policy_(policy) {
+      : params_(params), policy_(policy), points_(params.rebuild_min) {
     params_.validate();
   }
 
@@ -85,8 +87,7 @@ class KnnTracker {
       removed_.push_back(i);
       erase_s(s_[i]);
       for (std::size_t j = 0; j < count_[i]; ++j) drop_reverse(nbr(i)[j], i);
-      set_outlier(i, false);
-      hist_remove(i);
+      unregister_ball(i);
       points_.remove(i);
     };
     for (const std::uint64_t id : change.removed) {
@@ -128,7 +129,7 @@ class KnnTracker {
       commit_neighbours(j);
       add_s(s_[j]);
     }
-    // A pair can be offered twice (radius query and outlier list): keep one of each.
+    // A pair can be offered twice (a ball registered in two cells of one level): keep one.
     std::sort(offers_.begin(), offers_.end());
     offers_.erase(std::unique(offers_.begin(), offers_.end()), offers_.end());
     for (const index_type q : recompute_) {
@@ -195,8 +196,9 @@ class KnnTracker {
                         (dk2_.capacity() + s_.capacity()) * sizeof(double) +
                         dk_id_.capacity() * sizeof(std::uint64_t) +
                         rev_.capacity() * sizeof(std::vector<index_type>) +
-                        outlier_pos_.capacity() * sizeof(index_type) + marked_.capacity() +
-                        needs_query_.capacity() + is_new_.capacity() + id_to_index_.size() * 32;
+                        ball_r_.capacity() * sizeof(double) + balls_.memory_usage() +
+                        marked_.capacity() + needs_query_.capacity() + is_new_.capacity() +
+                        id_to_index_.size() * 32;
     for (const auto& r : rev_) bytes += r.capacity() * sizeof(index_type);
     return bytes;
   }
@@ -206,8 +208,11 @@ class KnnTracker {
   const std::vector<index_type>& new_indices() const { return new_; }
   const std::vector<index_type>& removed_indices() const { return removed_; }
   const std::vector<index_type>& reverse_neighbours(index_type i) const { return rev_[i]; }
-  const std::vector<index_type>& outliers() const { return outliers_; }
-  double cut_radius2() const { return r_cut2_; }
+  /// Every old point whose k-NN ball may contain p (a superset, possibly with repeats).
+  void ball_candidates(const Point3d& p, std::vector<index_type>& out) const {
+    out.clear();
+    balls_.candidates(p, out);
+  }
   std::size_t index_size() const { return points_.size(); }
   bool alive(index_type i) const { return points_.alive(i); }
   bool is_new(index_type i) const { return is_new_[i] != 0; }
@@ -217,10 +222,8 @@ class KnnTracker {
   const Point3d& position_at(index_type i) const { return points_.position(i); }
   std::uint64_t id_at(index_type i) const { return points_.id(i); }
   double s_at(index_type i) const { return s_[i]; }
-  void radius(const Point3d& c, double r2, std::vector<index_type>& out) {
+  void radius(const Point3d& c, double r2, std::vector<index_type>& out) const {
     points_.radius(c, r2, out);
-    ++radius_queries_;  // feeds the choice of r_cut (maintain())
-    radius_results_ += out.size();
   }
   bool marked(index_type i) const { return marked_[i] != 0; }
   /// i's k-NN must be searched again (it may have lost a neighbour, or the policy cannot tell).
@@ -292,11 +295,10 @@ class KnnTracker {
     dk_id_.resize(n, 0);
     s_.resize(n, std::numeric_limits<double>::quiet_NaN());
     rev_.resize(n);
-    outlier_pos_.resize(n, PointIndex::npos);
+    ball_r_.resize(n, std::numeric_limits<double>::quiet_NaN());
     marked_.resize(n, 0);
     needs_query_.resize(n, 0);
     is_new_.resize(n, 0);
-    hist_bucket_.resize(n, -1);
   }
 
   void drop_reverse(index_type owner, index_type who) {
@@ -325,7 +327,7 @@ class KnnTracker {
     if (scratch_.size() > params_.k) scratch_.resize(params_.k);
   }
 
-  // Stores scratch_ as i's neighbours (with s, d_k, reverse lists, outlier state); returns true
+  // Stores scratch_ as i's neighbours (with s, d_k, reverse lists, its ball); returns true
   // when the set changed.
   bool commit_neighbours(index_type i) {
     bool changed = scratch_.size() != count_[i];
@@ -339,12 +341,10 @@ class KnnTracker {
       }
       count_[i] = static_cast<std::uint32_t>(scratch_.size());
     }
-    hist_remove(i);
     dk2_[i] = scratch_.empty() ? 0.0 : scratch_.back().d2;
     dk_id_[i] = scratch_.empty() ? 0 : scratch_.back().id;
     s_[i] = mean_distance(scratch_);  // eq 5's s for this point
-    hist_add(i);
-    set_outlier(i, incomplete(i) || dk2_[i] > r_cut2_);
+    register_ball(i);
     return changed;
   }
 
@@ -357,64 +357,30 @@ class KnnTracker {
     ++erases_since_refresh_;
   }
 
-  // ---- outliers: points the insertion radius query cannot see --------------------------------
-  // The radius r_cut is a high quantile of d_k, picked from a log-scale histogram; complete points
-  // with d_k > r_cut and incomplete points are kept in `outliers_` and tested one by one.
+  // ---- k-NN balls (knn/ball_grid.hpp): where a new point can change this one's k-NN --------
 
-  static int bucket_of(double dk2) {
-    if (!(dk2 > 0.0)) return 0;
-    const int b = static_cast<int>(std::floor(2.0 * std::log2(dk2))) + 100;  // 4 per octave of d
-    return std::min(std::max(b, 1), kBuckets - 1);
+  double ball_radius(index_type i) const {
+    return incomplete(i) ? std::numeric_limits<double>::infinity() : std::sqrt(dk2_[i]);
   }
-  static double bucket_top2(int b) { return b == 0 ? 0.0 : std::exp2((b - 100 + 1) / 2.0); }
-
-  void hist_add(index_type i) {
-    if (incomplete(i)) return;
-    hist_bucket_[i] = bucket_of(dk2_[i]);
-    ++hist_[static_cast<std::size_t>(hist_bucket_[i])];
+  // The registered ball may be larger than the true one (candidates are tested exactly), so a
+  // ball that shrank by less than half keeps its registration: most affected points only shrink.
+  void register_ball(index_type i) {
+    const double r = ball_radius(i);
+    const double reg = ball_r_[i];
+    if (r <= reg && r >= 0.5 * reg) return;  // NaN reg (none yet) fails both tests
+    unregister_ball(i);
+    balls_.insert(i, points_.position(i), r);
+    ball_r_[i] = r;
   }
-  void hist_remove(index_type i) {
-    if (hist_bucket_[i] < 0) return;
-    --hist_[static_cast<std::size_t>(hist_bucket_[i])];
-    hist_bucket_[i] = -1;
-  }
-  void set_outlier(index_type i, bool on) {
-    const bool is = outlier_pos_[i] != PointIndex::npos;
-    if (on == is) return;
-    if (on) {
-      outlier_pos_[i] = static_cast<index_type>(outliers_.size());
-      outliers_.push_back(i);
-    } else {
-      const index_type pos = outlier_pos_[i];
-      outliers_[pos] = outliers_.back();
-      outlier_pos_[outliers_[pos]] = pos;
-      outliers_.pop_back();
-      outlier_pos_[i] = PointIndex::npos;
-    }
+  void unregister_ball(index_type i) {
+    if (std::isnan(ball_r_[i])) return;
+    balls_.erase(i, points_.position(i), ball_r_[i]);
+    ball_r_[i] = std::numeric_limits<double>::quiet_NaN();
   }
 
-  // After each apply: keep the outlier list short, the distribution exact enough, the dataset
-  // free of piles of dead entries.
+  // After each apply: keep the distribution exact enough and the dataset free of piles of dead
+  // entries.
   void maintain() {
-    // Each new point costs one radius query (its results) plus one test per outlier. Aim for as
-    // many outliers as the last radius queries returned on average, so the two costs balance.
-    std::size_t target = std::max<std::size_t>(32, points_.live() / 512);
-    if (radius_queries_ > 0)
-      target = std::min(std::max<std::size_t>(32, radius_results_ / radius_queries_),
-                        std::max<std::size_t>(32, points_.live() / 8));
-    radius_queries_ = radius_results_ = 0;
-    if (outliers_.size() > 2 * target + 16 || (outliers_.size() < target / 2 && r_cut2_ > 0.0)) {
-      std::size_t above = 0;
-      int b = kBuckets - 1;
-      while (b > 0 && above + hist_[static_cast<std::size_t>(b)] <= target)
-        above += hist_[static_cast<std::size_t>(b--)];
-      const double cut = bucket_top2(b);
-      if (cut != r_cut2_) {
-        r_cut2_ = cut;
-        for (index_type i = 0; i < points_.size(); ++i)
-          if (points_.alive(i)) set_outlier(i, incomplete(i) || dk2_[i] > r_cut2_);
-      }
-    }
     if (erases_since_refresh_ > std::max<std::size_t>(1024, dist_.count())) refresh_distribution();
     if (points_.dead() > params_.compact_min_dead && points_.dead() > points_.live()) compact();
   }
@@ -427,7 +393,6 @@ class KnnTracker {
     std::vector<double> dk2(n), s(n);
     std::vector<std::uint64_t> dk_id(n);
     std::vector<std::vector<index_type>> rev(n);
-    std::vector<int> bucket(n);
     for (std::size_t old = 0; old < remap.size(); ++old) {
       const index_type i = remap[old];
       if (i == PointIndex::npos) continue;
@@ -440,7 +405,6 @@ class KnnTracker {
       dk2[i] = dk2_[old];
       dk_id[i] = dk_id_[old];
       s[i] = s_[old];
-      bucket[i] = hist_bucket_[old];
       for (const index_type r : rev_[old])
         if (remap[r] != PointIndex::npos) rev[i].push_back(remap[r]);
     }
@@ -450,17 +414,14 @@ class KnnTracker {
     dk_id_.swap(dk_id);
     s_.swap(s);
     rev_.swap(rev);
-    hist_bucket_.swap(bucket);
     marked_.assign(n, 0);
     needs_query_.assign(n, 0);
     is_new_.assign(n, 0);
-    outlier_pos_.assign(n, PointIndex::npos);
-    outliers_.clear();
     for (auto& [id, idx] : id_to_index_) idx = remap[idx];
-    for (index_type i = 0; i < n; ++i) set_outlier(i, incomplete(i) || dk2_[i] > r_cut2_);
+    balls_.clear();
+    ball_r_.assign(n, std::numeric_limits<double>::quiet_NaN());
+    for (index_type i = 0; i < n; ++i) register_ball(i);
   }
-
-  static constexpr int kBuckets = 200;
 
   TrackerParams params_;
   AffectedPolicy policy_;
@@ -473,16 +434,12 @@ class KnnTracker {
   std::vector<std::uint64_t> dk_id_;          // id of the k-th neighbour
   std::vector<double> s_;                     // eq 5's s, NaN when incomplete
   std::vector<std::vector<index_type>> rev_;  // points that have this one among their k-NN
-  std::vector<index_type> outlier_pos_;
+  std::vector<double> ball_r_;                // radius its k-NN ball is registered with (NaN: none)
   std::vector<std::uint8_t> marked_, needs_query_, is_new_;
-  std::vector<int> hist_bucket_;
   // The distribution and the insertion search radius.
   RunningNormal dist_;
   std::size_t erases_since_refresh_ = 0;
-  std::vector<std::size_t> hist_ = std::vector<std::size_t>(kBuckets, 0);
-  std::vector<index_type> outliers_;
-  double r_cut2_ = 0.0;
-  std::size_t radius_queries_ = 0, radius_results_ = 0;
+  detail::BallGrid balls_;
   // Per apply():
   std::vector<index_type> new_, removed_, recompute_;
   std::vector<std::pair<index_type, index_type>> offers_;  // (point, new point it should consider)

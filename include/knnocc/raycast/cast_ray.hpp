@@ -40,16 +40,19 @@ CastResult<Key> cast_ray(const OccupancyMap<Key>& map, const Point3f& origin,
                    static_cast<float>(grid.index_to_coord(k[1])),
                    static_cast<float>(grid.index_to_coord(k[2]))};
   };
-  r.end = centre(r.key);
-  if (const auto v = map.logodds(r.key)) {
-    if (map.is_occupied(*v)) {
+  // Whether the walk ends in r.key: an occupied voxel, or an unknown one when unknown stops it.
+  auto stops_here = [&] {
+    if (const auto v = map.logodds(r.key)) {
+      if (!map.is_occupied(*v)) return false;
       r.status = CastStatus::occupied;
-      return r;
+      return true;
     }
-  } else if (!ignore_unknown) {
+    if (ignore_unknown) return false;
     r.status = CastStatus::unknown;
-    return r;
-  }
+    return true;
+  };
+  r.end = centre(r.key);
+  if (stops_here()) return r;
 
   float dir[3] = {direction.x, direction.y, direction.z};
   if (!(std::isfinite(dir[0]) && std::isfinite(dir[1]) && std::isfinite(dir[2]))) {
@@ -107,15 +110,7 @@ CastResult<Key> cast_ray(const OccupancyMap<Key>& map, const Point3f& origin,
         return r;
       }
     }
-    if (const auto v = map.logodds(r.key)) {
-      if (map.is_occupied(*v)) {
-        r.status = CastStatus::occupied;
-        return r;
-      }
-    } else if (!ignore_unknown) {
-      r.status = CastStatus::unknown;
-      return r;
-    }
+    if (stops_here()) return r;
   }
 }
 

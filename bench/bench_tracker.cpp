@@ -165,20 +165,12 @@ void orbslam(const std::filesystem::path& dir) {
   params.k = 8;
   knnocc::KnnTracker<> tracker(params);
   std::vector<double> us;
+  knnocc::KeyframeUnion map_cloud;
+  std::vector<knnocc::Point3d> world;
+  std::vector<std::uint64_t> ids;
   for (std::size_t i = 0; i < seq.size(); ++i) {
-    const auto kf = seq.load_cloud(i);
-    const Eigen::Matrix3d R = seq.pose(i).q.toRotationMatrix();
-    knnocc::ChangeSet cs;
-    for (std::size_t j = 0; j < kf.points.size(); ++j) {
-      const auto& p = kf.points[j];
-      if (std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) > 4.0) continue;
-      if (tracker.contains(kf.ids[j]) ||
-          std::any_of(cs.added.begin(), cs.added.end(),
-                      [&](const knnocc::IdPoint& a) { return a.id == kf.ids[j]; }))
-        continue;
-      const Eigen::Vector3d w = R * Eigen::Vector3d(p.x, p.y, p.z) + seq.pose(i).t;
-      cs.added.push_back({kf.ids[j], {w.x(), w.y(), w.z()}});
-    }
+    knnocc::io::keyframe_to_world(seq.pose(i), seq.load_cloud(i), 4.0, world, ids);
+    const knnocc::ChangeSet cs = map_cloud.add(world, ids);
     const double t0 = now();
     tracker.apply(cs);
     us.push_back(1e6 * (now() - t0));

@@ -26,21 +26,14 @@ TEST_CASE("knn_orbslam.incremental_equals_brute_force") {
   std::vector<std::pair<std::uint64_t, knnocc::Point3d>> cloud;  // the map cloud so far
   std::size_t checked_points = 0, wrong = 0;
   std::vector<knnocc::Neighbor> all;
+  knnocc::KeyframeUnion map_cloud;
+  std::vector<knnocc::Point3d> world;
+  std::vector<std::uint64_t> ids;
   for (std::size_t i = 0; i < seq.size(); ++i) {
     const auto kf = seq.load_cloud(i);
     REQUIRE(kf.ids.size() == kf.points.size());
-    const Eigen::Matrix3d R = seq.pose(i).q.toRotationMatrix();
-    knnocc::ChangeSet cs;
-    for (std::size_t j = 0; j < kf.points.size(); ++j) {
-      const auto& p = kf.points[j];
-      if (std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) > 4.0) continue;
-      if (tracker.contains(kf.ids[j])) continue;  // a map point keeps its first position
-      if (std::any_of(cs.added.begin(), cs.added.end(),
-                      [&](const knnocc::IdPoint& a) { return a.id == kf.ids[j]; }))
-        continue;
-      const Eigen::Vector3d w = R * Eigen::Vector3d(p.x, p.y, p.z) + seq.pose(i).t;
-      cs.added.push_back({kf.ids[j], {w.x(), w.y(), w.z()}});
-    }
+    knnocc::io::keyframe_to_world(seq.pose(i), kf, 4.0, world, ids);
+    const knnocc::ChangeSet cs = map_cloud.add(world, ids);
     tracker.apply(cs);
     for (const auto& a : cs.added) cloud.emplace_back(a.id, a.p);
     // Brute force for every point of the map cloud.

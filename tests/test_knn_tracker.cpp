@@ -285,6 +285,17 @@ TEST_CASE("knn_tracker.change_set_builders") {
   CHECK(second.added[0].id == 3);
   CHECK(second.added[0].p.x == 7.0);
   CHECK(second.removed == std::vector<std::uint64_t>{2});
+  // Keyframe union: an id joins once at its first position; without ids every point is new.
+  knnocc::KeyframeUnion with_ids, without_ids;
+  const std::vector<Point3d> kf = {{0, 0, 0}, {1, 0, 0}};
+  CHECK(with_ids.add(kf, {7, 8}).added.size() == 2);
+  const ChangeSet again = with_ids.add({{5, 5, 5}, {2, 0, 0}}, {7, 9});
+  REQUIRE(again.added.size() == 1);
+  CHECK(again.added[0].id == 9);
+  CHECK(without_ids.add(kf, {}).added.size() == 2);
+  const ChangeSet fresh = without_ids.add(kf, {});
+  REQUIRE(fresh.added.size() == 2);
+  CHECK(fresh.added[0].id == 2);
   // Feeding the tracker the detector's changes keeps a consistent cloud.
   knnocc::TrackerParams params;
   params.k = 1;

@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <limits>
 #include <string>
-#include <unordered_set>
 #include <vector>
 
 #include <knnocc/io/atomic_file.hpp>
@@ -58,31 +57,15 @@ int run_track_with(const Args& args, const Policy& policy) {
   const auto seq = io::Sequence::open(input);
   KnnTracker<Policy> tracker(params, policy);
   std::string stats;
-  std::uint64_t next_id = 0;  // ids for clouds without an id property
+  KeyframeUnion map_cloud;
+  std::vector<Point3d> world;
+  std::vector<std::uint64_t> ids;
   std::size_t keyframes = 0;
   const auto t0 = std::chrono::steady_clock::now();
   Progress progress("track", seq.size());
   for (std::size_t i = 0; i < seq.size(); ++i) {
-    const io::Cloud kf = seq.load_cloud(i);
-    const Eigen::Matrix3d R = seq.pose(i).q.toRotationMatrix();
-    const Eigen::Vector3d& t = seq.pose(i).t;
-    ChangeSet cs;
-    std::unordered_set<std::uint64_t> in_this;
-    for (std::size_t j = 0; j < kf.points.size(); ++j) {
-      const Point3f& p = kf.points[j];
-      if (max_range > 0.0 &&
-          !(std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= max_range))
-        continue;
-      std::uint64_t id = next_id;
-      if (!kf.ids.empty()) {
-        id = kf.ids[j];
-        if (tracker.contains(id) || !in_this.insert(id).second) continue;
-      } else {
-        ++next_id;
-      }
-      const Eigen::Vector3d w = R * Eigen::Vector3d(p.x, p.y, p.z) + t;
-      cs.added.push_back({id, {w.x(), w.y(), w.z()}});
-    }
+    io::keyframe_to_world(seq.pose(i), seq.load_cloud(i), max_range, world, ids);
+    const ChangeSet cs = map_cloud.add(world, ids);
     const auto a = std::chrono::steady_clock::now();
     const TrackerUpdate up = tracker.apply(cs);
     const double us =

@@ -4,6 +4,7 @@
 // frame; use transform_to_world(pose(i), ...) to move them.
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <filesystem>
 #include <string>
@@ -96,5 +97,24 @@ class Sequence {
   std::vector<Pose> poses_;
   std::vector<std::string> clouds_;
 };
+
+// The points of a keyframe within max_range of its sensor (max_range <= 0: all of them), in the
+// world frame and in double (R * p + t); `ids` gets the ids of the kept points when the cloud has
+// ids, and is left empty otherwise. The k-NN tracker's input.
+inline void keyframe_to_world(const Pose& pose, const Cloud& cloud, double max_range,
+                              std::vector<Point3d>& world, std::vector<std::uint64_t>& ids) {
+  world.clear();
+  ids.clear();
+  const Eigen::Matrix3d R = pose.q.toRotationMatrix();
+  for (std::size_t j = 0; j < cloud.points.size(); ++j) {
+    const Point3f& p = cloud.points[j];
+    if (max_range > 0.0 &&
+        !(std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= max_range))
+      continue;
+    const Eigen::Vector3d w = R * Eigen::Vector3d(p.x, p.y, p.z) + pose.t;
+    world.push_back(Point3d{w.x(), w.y(), w.z()});
+    if (!cloud.ids.empty()) ids.push_back(cloud.ids[j]);
+  }
+}
 
 }  // namespace knnocc::io

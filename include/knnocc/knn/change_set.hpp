@@ -71,6 +71,30 @@ inline ChangeSet diff_by_id(const std::unordered_map<std::uint64_t, Point3d>& pr
   return cs;
 }
 
+/// The map point cloud as the union of keyframe observations (how the paper builds it from
+/// ORB-SLAM keyframes): a point with an id joins once, at its first observed position; without
+/// ids every point of every keyframe is a new map point (ids 0, 1, 2, ... in arrival order).
+/// A sequence should either always or never carry ids.
+class KeyframeUnion {
+ public:
+  /// world: one keyframe's points in the world frame; ids: one per point, or empty.
+  ChangeSet add(const std::vector<Point3d>& world, const std::vector<std::uint64_t>& ids) {
+    ChangeSet cs;
+    for (std::size_t j = 0; j < world.size(); ++j) {
+      if (ids.empty()) {
+        cs.added.push_back({next_id_++, world[j]});
+      } else if (seen_.insert(ids[j]).second) {
+        cs.added.push_back({ids[j], world[j]});
+      }
+    }
+    return cs;
+  }
+
+ private:
+  std::unordered_set<std::uint64_t> seen_;
+  std::uint64_t next_id_ = 0;
+};
+
 /// Change detection for clouds without ids, at a voxel resolution. Keeps the cloud it has
 /// reported so far (with the ids it gave out) and turns each new cloud into a ChangeSet.
 class SpatialChangeDetector {

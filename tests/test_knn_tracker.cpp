@@ -226,6 +226,37 @@ TEST_CASE("knn_tracker.defined_edge_cases") {
   CHECK_THROWS_AS(knnocc::KnnTracker<>(knnocc::TrackerParams{0}), std::invalid_argument);
 }
 
+TEST_CASE("knn_tracker.erasing_an_outlier_keeps_sigma_exact") {
+  // Erasing values far from the rest cancels nearly all of S (eq 10): the tracker notices and
+  // recomputes the distribution from the stored s values.
+  knnocc::TrackerParams params;
+  params.k = 3;
+  knnocc::KnnTracker<> tr(params);
+  Cloud cloud;
+  ChangeSet cs;
+  knnocc::test::Rng rng(3);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (std::uint64_t i = 0; i < 100; ++i) cs.added.push_back({i, {u(rng), u(rng), u(rng)}});
+  cs.added.push_back({500, {1e8, 0, 0}});  // its s is ~1e8: S is almost all its own
+  tr.apply(cs);
+  apply_to(cloud, cs);
+  ChangeSet out;
+  out.removed = {500};
+  tr.apply(out);
+  apply_to(cloud, out);
+  expect_matches(tr, cloud);
+}
+
+TEST_CASE("knn_tracker.bad_parameters_are_refused_up_front") {
+  knnocc::TrackerParams params;
+  CHECK_THROWS_AS(knnocc::KnnTracker<knnocc::PaperAnnulus>(params, knnocc::PaperAnnulus{0.0, 2.0}),
+                  std::invalid_argument);
+  CHECK_THROWS_AS(knnocc::KnnTracker<knnocc::PaperAnnulus>(params, knnocc::PaperAnnulus{1e-9, 2.0}),
+                  std::invalid_argument);  // would take 2e9 radius queries per point
+  params.rebuild_min = 0;
+  CHECK_THROWS_AS(knnocc::KnnTracker<>{params}, std::invalid_argument);
+}
+
 TEST_CASE("knn_tracker.paper_annulus_misses_affected_points") {
   // Two dense clusters 4 m apart and a lone point between them whose k-NN reach into the left
   // cluster. Points added to the left cluster change the lone point's k-NN, but Alg. 1's annulus
@@ -296,6 +327,19 @@ TEST_CASE("knn_tracker.change_set_builders") {
   const ChangeSet fresh = without_ids.add(kf, {});
   REQUIRE(fresh.added.size() == 2);
   CHECK(fresh.added[0].id == 2);
+  // Non-finite entries count as absent, so an id that gets a position later is an addition.
+  const Point3d nan_p{std::nan(""), 0, 0};
+  CHECK(knnocc::diff_by_id({}, {{7, nan_p}}).empty());
+  const ChangeSet later = knnocc::diff_by_id({{7, nan_p}}, {{7, {1, 2, 3}}});
+  REQUIRE(later.added.size() == 1);
+  CHECK(later.added[0].id == 7);
+  CHECK(knnocc::diff_by_id({{7, {1, 2, 3}}}, {{7, nan_p}}).removed ==
+        std::vector<std::uint64_t>{7});
+  knnocc::KeyframeUnion nan_first;
+  CHECK(nan_first.add({nan_p}, {4}).added.empty());
+  CHECK(nan_first.add({{1, 1, 1}}, {4}).added.size() == 1);  // joins at its first finite sighting
+  CHECK(nan_first.skipped_nonfinite() == 1);
+  CHECK_THROWS_AS(nan_first.add({{2, 2, 2}}, {}), std::invalid_argument);  // ids, then none
   // Feeding the tracker the detector's changes keeps a consistent cloud.
   knnocc::TrackerParams params;
   params.k = 1;
@@ -304,4 +348,49 @@ TEST_CASE("knn_tracker.change_set_builders") {
   tr.apply(second);
   CHECK(tr.size() == 4);
   CHECK(tr.s(3) == doctest::Approx(0.1));
+}
+
+TEST_CASE("knn_tracker.tree_ties_match_brute_force_far_from_the_origin") {
+  // A micro-cluster (1e-7 m) a million metres from the origin, seen from points spread over
+  // 1e9 m: nanoflann's incremental box bound carries several ulps of rounding, so exact ties
+  // (equal distances, decided by id) must still reach the collector.
+  knnocc::test::Rng rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::size_t wrong = 0, queries = 0;
+  for (int rep = 0; rep < 4; ++rep) {
+    std::vector<Point3d> pts;
+    std::vector<std::uint64_t> ids;
+    const std::size_t n = 1500;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (i % 30 == 0)
+        pts.push_back({1e9 * (u(rng) - 0.5), 1e9 * (u(rng) - 0.5), 1e9 * (u(rng) - 0.5)});
+      else
+        pts.push_back({-1e6 + 1e-7 * u(rng), 5e5 + 1e-7 * u(rng), -3e6 + 1e-7 * u(rng)});
+      ids.push_back(rng() % 100000000);
+    }
+    knnocc::PointIndex index(64);
+    for (std::size_t i = 0; i < n; ++i) {
+      index.append(ids[i], pts[i]);
+      if (i % 97 == 0) index.flush();
+    }
+    index.flush();
+    std::vector<knnocc::Neighbor> got, all;
+    for (const std::size_t k : {1u, 3u, 10u})
+      for (std::uint32_t q = 0; q < n; ++q) {
+        index.knn(q, k, got);
+        all.clear();
+        for (std::uint32_t j = 0; j < n; ++j)
+          if (j != q) all.push_back({j, ids[j], knnocc::dist2(pts[q], pts[j])});
+        std::partial_sort(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(k), all.end(),
+                          [](const knnocc::Neighbor& a, const knnocc::Neighbor& b) {
+                            return knnocc::closer(a.d2, a.id, b.d2, b.id);
+                          });
+        bool same = got.size() == k;
+        for (std::size_t j = 0; same && j < k; ++j) same = got[j].index == all[j].index;
+        wrong += !same;
+        ++queries;
+      }
+  }
+  MESSAGE(queries << " k-NN queries compared with brute force");
+  CHECK(wrong == 0);
 }

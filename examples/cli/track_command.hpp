@@ -79,6 +79,9 @@ int run_track_with(const Args& args, const Policy& policy) {
     progress.update(i + 1);
   }
   progress.finish();
+  if (map_cloud.skipped_nonfinite())
+    std::fprintf(stderr, "knnocc track: %s: skipped %zu points with NaN/Inf coordinates\n",
+                 input.c_str(), map_cloud.skipped_nonfinite());
 
   io::AtomicFile out(stats_path);
   out.write("# index N mu sigma new removed affected microseconds\n");

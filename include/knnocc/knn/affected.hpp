@@ -24,6 +24,8 @@
 namespace knnocc {
 
 struct ExactReverseKnn {
+  void validate() const {}
+
   template <class Tracker>
   void collect(Tracker& t, std::vector<std::uint32_t>& out) const {
     for (const std::uint32_t r : t.removed_indices())
@@ -54,11 +56,12 @@ struct PaperAnnulus {
     if (!(dr > 0.0) || !std::isfinite(dr)) detail::invalid_argument("PaperAnnulus: dr must be > 0");
     if (!(s_max > 0.0) || !std::isfinite(s_max))
       detail::invalid_argument("PaperAnnulus: s_max must be finite and > 0");
+    if (s_max / dr > 1e6)  // each step is a radius query; also keeps r += dr moving
+      detail::invalid_argument("PaperAnnulus: s_max / dr must be at most 1e6");
   }
 
   template <class Tracker>
   void collect(Tracker& t, std::vector<std::uint32_t>& out) const {
-    validate();
     std::vector<Point3d> centres;
     for (const std::uint32_t p : t.new_indices()) centres.push_back(t.position_at(p));
     for (const std::uint32_t p : t.removed_indices()) centres.push_back(t.position_at(p));

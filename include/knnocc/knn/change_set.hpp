@@ -46,13 +46,19 @@ Point3d to_point3d(const P& p) {
 
 /// Change from `previous` to `next`, both maps id -> position. A position counts as moved when
 /// any coordinate differs by more than `tolerance` (0: any difference).
+inline bool is_finite(const Point3d& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
+
+/// Entries with a NaN/Inf coordinate count as absent (the tracker never holds such points).
 inline ChangeSet diff_by_id(const std::unordered_map<std::uint64_t, Point3d>& previous,
                             const std::unordered_map<std::uint64_t, Point3d>& next,
                             double tolerance = 0.0) {
   ChangeSet cs;
   for (const auto& [id, p] : next) {
+    if (!is_finite(p)) continue;
     auto it = previous.find(id);
-    if (it == previous.end()) {
+    if (it == previous.end() || !is_finite(it->second)) {
       cs.added.push_back({id, p});
       continue;
     }
@@ -61,8 +67,11 @@ inline ChangeSet diff_by_id(const std::unordered_map<std::uint64_t, Point3d>& pr
         std::fabs(p.z - q.z) > tolerance)
       cs.moved.push_back({id, p});
   }
-  for (const auto& [id, p] : previous)
-    if (!next.count(id)) cs.removed.push_back(id);
+  for (const auto& [id, p] : previous) {
+    if (!is_finite(p)) continue;
+    auto it = next.find(id);
+    if (it == next.end() || !is_finite(it->second)) cs.removed.push_back(id);
+  }
   // Hash order is not deterministic across libraries; sorted lists make runs reproducible.
   auto by_id = [](const IdPoint& a, const IdPoint& b) { return a.id < b.id; };
   std::sort(cs.added.begin(), cs.added.end(), by_id);
@@ -74,14 +83,25 @@ inline ChangeSet diff_by_id(const std::unordered_map<std::uint64_t, Point3d>& pr
 /// The map point cloud as the union of keyframe observations (how the paper builds it from
 /// ORB-SLAM keyframes): a point with an id joins once, at its first observed position; without
 /// ids every point of every keyframe is a new map point (ids 0, 1, 2, ... in arrival order).
-/// A sequence should either always or never carry ids.
+/// A sequence must either always or never carry ids (mixing is refused: generated ids could
+/// collide with real ones). Points with a NaN/Inf coordinate are skipped and counted; an id first
+/// seen that way joins at its first finite observation.
 class KeyframeUnion {
  public:
   /// world: one keyframe's points in the world frame; ids: one per point, or empty.
   ChangeSet add(const std::vector<Point3d>& world, const std::vector<std::uint64_t>& ids) {
+    if (!world.empty()) {
+      if (with_ids_ == kUnknown) with_ids_ = ids.empty() ? kNo : kYes;
+      if ((with_ids_ == kYes) == ids.empty())
+        detail::invalid_argument("KeyframeUnion: keyframes with and without ids are mixed");
+      if (!ids.empty() && ids.size() != world.size())
+        detail::invalid_argument("KeyframeUnion: one id per point expected");
+    }
     ChangeSet cs;
     for (std::size_t j = 0; j < world.size(); ++j) {
-      if (ids.empty()) {
+      if (!is_finite(world[j])) {
+        ++skipped_nonfinite_;
+      } else if (ids.empty()) {
         cs.added.push_back({next_id_++, world[j]});
       } else if (seen_.insert(ids[j]).second) {
         cs.added.push_back({ids[j], world[j]});
@@ -89,10 +109,14 @@ class KeyframeUnion {
     }
     return cs;
   }
+  std::size_t skipped_nonfinite() const { return skipped_nonfinite_; }
 
  private:
+  enum Mode { kUnknown, kYes, kNo };
+  Mode with_ids_ = kUnknown;
   std::unordered_set<std::uint64_t> seen_;
   std::uint64_t next_id_ = 0;
+  std::size_t skipped_nonfinite_ = 0;
 };
 
 /// Change detection for clouds without ids, at a voxel resolution. Keeps the cloud it has
@@ -113,7 +137,7 @@ class SpatialChangeDetector {
     ChangeSet cs;
     for (const auto& p : cloud) {  // input order, so ids are given out deterministically
       const Point3d q = to_point3d(p);
-      if (!(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z))) continue;
+      if (!is_finite(q)) continue;
       const std::uint64_t v = voxel(q);
       seen.insert(v);
       if (!fresh.count(v)) {

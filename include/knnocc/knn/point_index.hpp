@@ -23,6 +23,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "../core/config.hpp"
 #include "../core/point3.hpp"
 #include "nanoflann_compat.hpp"
 
@@ -79,10 +80,13 @@ struct Dist2Metric {
   }
 };
 
-// nanoflann only offers a point to the result set when dist < worstDist(); reporting the next
-// representable value lets equal distances through, so ties are decided by id here.
+// nanoflann only offers a point to the result set when dist < worstDist(), and its pruning bound
+// for a subtree (built up incrementally from per-axis terms) can exceed the true distance by a
+// few ulps. Reporting a slightly larger worst distance lets every point at exactly the worst
+// distance through, so ties are decided by id here; the extra candidates are few and are tested
+// exactly by the collectors.
 inline double admit_equal(double d2) {
-  return std::nextafter(d2, std::numeric_limits<double>::infinity());
+  return d2 + d2 * 1e-13 + std::numeric_limits<double>::denorm_min();
 }
 
 // The k nearest by (d2, id), skipping one index (the query point itself).
@@ -166,6 +170,8 @@ class PointIndex {
 
   /// Appends a point; it joins the search structure at the next flush().
   index_type append(std::uint64_t id, const Point3d& p) {
+    if (pts_.size() >= npos - 1)
+      detail::invalid_argument("PointIndex: more than 2^32 - 2 dataset entries (compact first)");
     pts_.push_back(p);
     ids_.push_back(id);
     alive_.push_back(1);

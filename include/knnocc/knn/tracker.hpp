@@ -15,11 +15,15 @@
 //     once the cloud is large enough it is handled as a new point (paper section 4.3);
 //   - k larger than the cloud: every s is NaN, N == 0, mu == sigma == 0;
 //   - duplicate positions: distance 0 is a valid neighbour distance (s may be 0);
-//   - non-finite positions in a change set are skipped and counted;
+//   - positions with a NaN/Inf coordinate (or beyond 1e150) in a change set are skipped and
+//     counted;
 //   - adding an id that exists, or removing/moving one that does not, is a caller error
-//     (std::invalid_argument; abort without exceptions), detected before anything changes.
+//     (std::invalid_argument; abort without exceptions), detected before anything changes;
+//     once a change set is accepted only std::bad_alloc can interrupt apply(), after which the
+//     tracker must be discarded.
 // Rounding: Welford erase accumulates error; after more erases than max(1024, N) since the last
-// refresh, the distribution is recomputed exactly from the stored s values (amortised O(1)).
+// refresh, or an erase that cancels most of S, the distribution is recomputed exactly from the
+// stored s values (amortised O(1)).
 //
 // Thread safety: const queries may run concurrently while apply() does not.
 
@@ -49,6 +53,8 @@ struct TrackerParams {
 
   void validate() const {
     if (k < 1 || k > 4096) detail::invalid_argument("k must be in [1, 4096]");
+    if (rebuild_min < 1 || rebuild_min > (std::size_t{1} << 29))
+      detail::invalid_argument("rebuild_min must be in [1, 2^29]");
     if (!(s_limit > 0.0)) detail::invalid_argument("s_limit must be > 0");
   }
 };
@@ -70,6 +76,7 @@ class KnnTracker {
   explicit KnnTracker(TrackerParams params = {}, AffectedPolicy policy = {})
       : params_(params), policy_(policy), points_(params.rebuild_min) {
     params_.validate();
+    policy_.validate();  // every policy has one; all checks happen before any apply()
   }
 
   /// Alg. 2 for one change of the map point cloud.
@@ -188,6 +195,7 @@ class KnnTracker {
       if (points_.alive(i) && is_valid(s_[i])) valid.push_back(s_[i]);
     dist_.recompute(valid);
     erases_since_refresh_ = 0;
+    refresh_pending_ = false;
   }
 
   std::size_t memory_usage() const {
@@ -249,8 +257,9 @@ class KnnTracker {
   }
 
  private:
+  // Beyond 1e150 m squared distances overflow to +inf and the trees could not order them.
   static bool finite(const Point3d& p) {
-    return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+    return std::fabs(p.x) <= 1e150 && std::fabs(p.y) <= 1e150 && std::fabs(p.z) <= 1e150;
   }
   bool is_valid(double s) const { return !std::isnan(s) && s < params_.s_limit; }
   index_type index_of(std::uint64_t id) const {
@@ -353,8 +362,11 @@ class KnnTracker {
   }
   void erase_s(double s) {
     if (!is_valid(s)) return;
+    const double before = dist_.sum_squares();
     dist_.erase(s);  // eq 9-11
     ++erases_since_refresh_;
+    // Erasing a value far from the rest cancels most of S (eq 10) and with it its precision.
+    if (dist_.sum_squares() < 1e-3 * before) refresh_pending_ = true;
   }
 
   // ---- k-NN balls (knn/ball_grid.hpp): where a new point can change this one's k-NN --------
@@ -381,7 +393,8 @@ class KnnTracker {
   // After each apply: keep the distribution exact enough and the dataset free of piles of dead
   // entries.
   void maintain() {
-    if (erases_since_refresh_ > std::max<std::size_t>(1024, dist_.count())) refresh_distribution();
+    if (refresh_pending_ || erases_since_refresh_ > std::max<std::size_t>(1024, dist_.count()))
+      refresh_distribution();
     if (points_.dead() > params_.compact_min_dead && points_.dead() > points_.live()) compact();
   }
 
@@ -439,6 +452,7 @@ class KnnTracker {
   // The distribution and the insertion search radius.
   RunningNormal dist_;
   std::size_t erases_since_refresh_ = 0;
+  bool refresh_pending_ = false;
   detail::BallGrid balls_;
   // Per apply():
   std::vector<index_type> new_, removed_, recompute_;

@@ -103,6 +103,9 @@ TEST_CASE("keys.coarse_depth") {
   CHECK(k15[0] == 32768 + 5);
   CHECK(k15[1] == 32768 - 3);
   CHECK(k15[2] == 32768 + 1);
+  // Far below the centre at a coarse depth (negative offsets; OctoMap's adjustKeyAtDepth).
+  const OcKey low = Grid<OcKey>::key_at_depth(OcKey(100, 100, 100), 5);
+  CHECK(low[0] == 1024);  // (100 - 32768) >> 11 = -16; -16 * 2048 + 1024 + 32768
   const OcKey k13 = Grid<OcKey>::key_at_depth(k, 13);
   CHECK(k13[0] == 32768 + 4);
   CHECK(k13[1] == 32768 - 8 + 4);

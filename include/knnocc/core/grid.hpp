@@ -87,9 +87,10 @@ class Grid {
     const int shift = depth - d;
     Key out;
     for (int i = 0; i < 3; ++i) {
+      // Arithmetic shift floors negative offsets; multiplying back avoids shifting a negative.
       const std::int64_t v = (static_cast<std::int64_t>(key[i]) - Key::center) >> shift;
-      out[i] =
-          static_cast<index_type>((v << shift) + (std::int64_t{1} << (shift - 1)) + Key::center);
+      out[i] = static_cast<index_type>(v * (std::int64_t{1} << shift) +
+                                       (std::int64_t{1} << (shift - 1)) + Key::center);
     }
     return out;
   }

@@ -2,13 +2,12 @@
 // incremental state equals the brute-force state.
 #include <doctest/doctest.h>
 
-#include <algorithm>
-#include <cmath>
 #include <vector>
 
 #include <knnocc/io/sequence.hpp>
 #include <knnocc/knn/tracker.hpp>
 
+#include "knn_oracle.hpp"
 #include "test_support.hpp"
 
 TEST_CASE("knn_orbslam.incremental_equals_brute_force") {
@@ -23,9 +22,7 @@ TEST_CASE("knn_orbslam.incremental_equals_brute_force") {
   params.k = 8;
   params.rebuild_min = 256;  // the static-tree rebuild path runs many times on the way
   knnocc::KnnTracker<> tracker(params);
-  std::vector<std::pair<std::uint64_t, knnocc::Point3d>> cloud;  // the map cloud so far
-  std::size_t checked_points = 0, wrong = 0;
-  std::vector<knnocc::Neighbor> all;
+  knnocc::test::Cloud cloud;  // the map cloud so far
   knnocc::KeyframeUnion map_cloud;
   std::vector<knnocc::Point3d> world;
   std::vector<std::uint64_t> ids;
@@ -35,28 +32,10 @@ TEST_CASE("knn_orbslam.incremental_equals_brute_force") {
     knnocc::io::keyframe_to_world(seq.pose(i), kf, 4.0, world, ids);
     const knnocc::ChangeSet cs = map_cloud.add(world, ids);
     tracker.apply(cs);
-    for (const auto& a : cs.added) cloud.emplace_back(a.id, a.p);
-    // Brute force for every point of the map cloud.
-    for (const auto& [id, p] : cloud) {
-      all.clear();
-      for (const auto& [jd, q] : cloud)
-        if (jd != id) all.push_back({0, jd, knnocc::dist2(q, p)});
-      const std::size_t m = std::min(params.k, all.size());
-      std::partial_sort(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(m), all.end(),
-                        [](const knnocc::Neighbor& a, const knnocc::Neighbor& b) {
-                          return knnocc::closer(a.d2, a.id, b.d2, b.id);
-                        });
-      double sum = 0;
-      for (std::size_t j = 0; j < m; ++j) sum += std::sqrt(all[j].d2);
-      const double s = m == params.k ? sum / double(params.k) : std::nan("");
-      const double got = tracker.s(id);
-      wrong += !(got == s || (std::isnan(got) && std::isnan(s)));
-      ++checked_points;
-    }
+    for (const auto& a : cs.added) cloud[a.id] = a.p;
+    CAPTURE(i);
+    knnocc::test::expect_matches(tracker, cloud);  // k-NN sets, s, N, mu, sigma
   }
-  MESSAGE(cloud.size() << " map points within 4 m; " << checked_points
-                       << " s values compared over 249 keyframes; N " << tracker.N() << " mu "
+  MESSAGE(cloud.size() << " map points within 4 m after 249 keyframes; N " << tracker.N() << " mu "
                        << tracker.mu() << " sigma " << tracker.sigma());
-  CHECK(wrong == 0);
-  CHECK(tracker.size() == cloud.size());
 }

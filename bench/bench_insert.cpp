@@ -1,13 +1,20 @@
-// bench_insert: OctoMap-model insertion of real scans with knnocc and, when found, liboctomap in
-// the same run. Prints times, the speed-up, voxel updates per second and map memory, and checks
-// that both libraries built the same map (counts of occupied and free finest-level voxels).
+// bench_insert: OctoMap-model insertion of real scans with knnocc (1 and 2 threads) and, when
+// found, liboctomap in the same run. Prints times, speed-ups, ray keys (voxel visits) per second,
+// map memory and bytes per known voxel, the peak memory each library's insertion adds to a
+// process (measured in forked children), and checks that all runs built the same map (counts
+// of occupied and free finest-level voxels).
 //
-// usage: bench_insert [--res R]... [--repeat N] [--data DIR]
+// usage: bench_insert [--res R]... [--repeat N] [--threads N]... [--data DIR]
 //   DIR defaults to ../shared/data (run from the project root). Uses
 //   octomap_fr079/scan.dat.bz2 (decompressed into build/data/ on first use) and
-//   tum_fr2_pioneer_slam2 (10 Kinect clouds). Resolutions default to 0.1 and 0.05.
+//   tum_fr2_pioneer_slam2 (10 Kinect clouds). Resolutions default to 0.1 and 0.05, threads to
+//   1 and 2. knnocc times are the best of --repeat runs (default 3), each on a fresh map and
+//   inserter; liboctomap runs once.
 
+#include <malloc.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -90,14 +97,15 @@ std::vector<Dataset> load(const fs::path& data) {
 struct Result {
   double seconds = 0;
   std::size_t occupied = 0, free = 0, ray_keys = 0, updates = 0, bytes = 0;
+  bool same_as(const Result& o) const { return occupied == o.occupied && free == o.free; }
 };
 
-Result run_knnocc(const Dataset& d, double res, int repeat) {
+Result run_knnocc(const Dataset& d, double res, unsigned threads, int repeat) {
   Result best;
   best.seconds = 1e30;
   for (int r = 0; r < repeat; ++r) {
     knnocc::OccupancyMap<OcKey> map(res);
-    knnocc::ScanInserter<OcKey> inserter(map);
+    knnocc::ScanInserter<OcKey> inserter(map, {}, threads);
     std::size_t keys = 0, updates = 0;
     const double t0 = now();
     for (const auto& s : d.scans) {
@@ -115,11 +123,15 @@ Result run_knnocc(const Dataset& d, double res, int repeat) {
 }
 
 #if KNNOCC_HAVE_OCTOMAP
-Result run_octomap(const Dataset& d, double res) {
-  octomap::OcTree tree(res);
+std::vector<octomap::Pointcloud> octomap_clouds(const Dataset& d) {
   std::vector<octomap::Pointcloud> clouds(d.scans.size());
   for (std::size_t i = 0; i < d.scans.size(); ++i)
     for (const auto& p : d.scans[i].points) clouds[i].push_back(p.x, p.y, p.z);
+  return clouds;
+}
+
+Result run_octomap(const Dataset& d, const std::vector<octomap::Pointcloud>& clouds, double res) {
+  octomap::OcTree tree(res);
   const double t0 = now();
   for (std::size_t i = 0; i < d.scans.size(); ++i) {
     const auto& o = d.scans[i].origin;
@@ -136,10 +148,49 @@ Result run_octomap(const Dataset& d, double res) {
 }
 #endif
 
+double resident_mb() {  // current RSS of this process
+  long pages = 0, resident = 0;
+  if (FILE* f = std::fopen("/proc/self/statm", "r")) {
+    if (std::fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
+    std::fclose(f);
+  }
+  return resident * (sysconf(_SC_PAGESIZE) / 1024.0) / 1024.0;
+}
+
+// Runs f() in a forked child; returns its result (sent through a pipe) and the peak RSS it added
+// to what the child had when it started (the datasets, inherited from here).
+template <class F>
+std::pair<Result, double> in_child(F f) {
+  struct Message {
+    Result result;
+    double start_mb;
+  };
+  int fd[2];
+  if (pipe(fd) != 0) std::exit(2);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    Message m;
+    malloc_trim(0);  // heap left free by earlier runs would hide the child's own allocations
+    m.start_mb = resident_mb();
+    m.result = f();
+    if (write(fd[1], &m, sizeof m) != static_cast<ssize_t>(sizeof m)) _exit(1);
+    _exit(0);
+  }
+  close(fd[1]);
+  Message m{};
+  if (read(fd[0], &m, sizeof m) != static_cast<ssize_t>(sizeof m)) m = Message{};
+  close(fd[0]);
+  int status = 0;
+  struct rusage ru {};
+  wait4(pid, &status, 0, &ru);
+  return {m.result, ru.ru_maxrss / 1024.0 - m.start_mb};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::vector<double> resolutions;
+  std::vector<unsigned> threads;
   int repeat = 3;
   fs::path data = fs::path("..") / "shared" / "data";
   for (int i = 1; i < argc; ++i) {
@@ -148,14 +199,18 @@ int main(int argc, char** argv) {
       resolutions.push_back(std::atof(argv[++i]));
     else if (a == "--repeat" && i + 1 < argc)
       repeat = std::max(1, std::atoi(argv[++i]));
+    else if (a == "--threads" && i + 1 < argc)
+      threads.push_back(static_cast<unsigned>(std::max(1, std::atoi(argv[++i]))));
     else if (a == "--data" && i + 1 < argc)
       data = argv[++i];
     else {
-      std::fprintf(stderr, "usage: bench_insert [--res R]... [--repeat N] [--data DIR]\n");
+      std::fprintf(stderr,
+                   "usage: bench_insert [--res R]... [--repeat N] [--threads N]... [--data DIR]\n");
       return 2;
     }
   }
   if (resolutions.empty()) resolutions = {0.1, 0.05};
+  if (threads.empty()) threads = {1, 2};
 
   std::printf("bench_insert: knnocc %s, build type '%s', flags '%s', %s\n", knnocc::version_string,
               KNNOCC_BENCH_BUILD_TYPE, KNNOCC_BENCH_CXX_FLAGS,
@@ -170,31 +225,47 @@ int main(int argc, char** argv) {
                  data.string().c_str());
     return 2;
   }
-  std::printf("%-34s %5s %9s %10s %9s %9s %8s %11s %9s %9s\n", "dataset", "res", "points",
-              "ray keys", "knnocc s", "octomap s", "speedup", "Mupdates/s", "knnocc MB",
-              "octomap MB");
   for (const auto& d : sets) {
-    for (const double res : resolutions) {
-      const Result k = run_knnocc(d, res, repeat);
-      double o_s = 0, o_mb = 0;
-      bool same = true;
 #if KNNOCC_HAVE_OCTOMAP
-      const Result o = run_octomap(d, res);
+    const auto clouds = octomap_clouds(d);  // built here: not part of the timing or the memory
+#endif
+    for (const double res : resolutions) {
+      std::printf("\n%s, %zu points, res %g m\n", d.name.c_str(), d.points(), res);
+      std::vector<Result> ours;
+      for (const unsigned t : threads) ours.push_back(run_knnocc(d, res, t, repeat));
+      const Result& k = ours[0];
+      bool same = true;
+      for (const Result& r : ours) same = same && r.same_as(k);
+      double o_s = 0, o_mb = 0, o_peak = 0;
+#if KNNOCC_HAVE_OCTOMAP
+      const auto [o, peak] = in_child([&] { return run_octomap(d, clouds, res); });
       o_s = o.seconds;
       o_mb = o.bytes / 1e6;
-      same = o.occupied == k.occupied && o.free == k.free;
+      o_peak = peak;
+      same = same && o.same_as(k);
 #endif
-      std::printf("%-34s %5.3g %9zu %10zu %9.3f %9.3f %7.1fx %11.1f %9.1f %9.1f%s\n",
-                  d.name.c_str(), res, d.points(), k.ray_keys, k.seconds, o_s,
-                  o_s > 0 ? o_s / k.seconds : 0.0, k.ray_keys / k.seconds / 1e6, k.bytes / 1e6,
-                  o_mb, same ? "" : "  MAPS DIFFER");
-      std::printf("%-34s       occupied %zu free %zu (finest-level voxels)\n", "", k.occupied,
-                  k.free);
+      const double k_peak = in_child([&] { return run_knnocc(d, res, threads[0], 1); }).second;
+      std::printf("  ray keys %zu, voxel updates %zu; map: occupied %zu free %zu\n", k.ray_keys,
+                  k.updates, k.occupied, k.free);
+      for (std::size_t i = 0; i < threads.size(); ++i) {
+        std::printf("  knnocc %u thread%s %8.4f s  %7.1f Mkeys/s", threads[i],
+                    threads[i] > 1 ? "s" : " ", ours[i].seconds,
+                    k.ray_keys / ours[i].seconds / 1e6);
+        if (o_s > 0) std::printf("  %6.1fx liboctomap", o_s / ours[i].seconds);
+        std::printf("\n");
+      }
+      if (o_s > 0)
+        std::printf("  liboctomap       %8.4f s  %7.1f Mkeys/s\n", o_s, k.ray_keys / o_s / 1e6);
+      const std::size_t voxels = k.occupied + k.free;
+      std::printf("  map memory: knnocc %.1f MB (%.1f B per known voxel)", k.bytes / 1e6,
+                  double(k.bytes) / voxels);
+      if (o_mb > 0)
+        std::printf(", liboctomap %.1f MB (%.1f B per known voxel)", o_mb, o_mb * 1e6 / voxels);
+      std::printf("\n  peak RSS added by the insertion: knnocc %.1f MB", k_peak);
+      if (o_peak > 0)
+        std::printf(", liboctomap %.1f MB (knnocc/liboctomap %.2f)", o_peak, k_peak / o_peak);
+      std::printf("\n  same map in every run: %s\n", same ? "yes" : "NO, MAPS DIFFER");
     }
   }
-  struct rusage ru {};
-  getrusage(RUSAGE_SELF, &ru);
-  std::printf("peak RSS of this process: %.1f MB (both libraries together)\n",
-              ru.ru_maxrss / 1024.0);
   return 0;
 }

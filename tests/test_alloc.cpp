@@ -45,3 +45,20 @@ TEST_CASE("insert.no_allocation_once_warmed_up") {
     CHECK(allocations == 0);
   }
 }
+
+TEST_CASE("insert.no_allocation_once_warmed_up_with_threads") {
+  knnocc::test::Rng rng(18);
+  std::uniform_real_distribution<float> u(-5.f, 5.f);
+  std::vector<knnocc::Point3f> scan(20000);
+  for (auto& p : scan) p = {u(rng), u(rng), u(rng) * 0.3f};
+
+  // The same kind of scan again (the per-group lists of touched bricks depend on the scan's box).
+  knnocc::OccupancyMap<knnocc::OcKey> map(0.1);
+  knnocc::ScanInserter<knnocc::OcKey> inserter(map, {}, 2);
+  inserter.insert_point_cloud(knnocc::Point3f{}, scan, 4.0);  // warm-up: threads, scratch, map
+  std::shuffle(scan.begin(), scan.end(), rng);
+  const std::size_t before = g_allocations.load();
+  const auto st = inserter.insert_point_cloud(knnocc::Point3f{}, scan, 4.0);
+  CHECK(st.ray_keys > 100000);
+  CHECK(g_allocations.load() - before == 0);
+}

@@ -40,14 +40,17 @@ options:
   --out-voxels FILE     write `x y z logodds` per finest voxel (centre, world frame, %.6f),
                         sorted by x, y, z; written to a temporary file, then renamed
   --voxels WHICH        which voxels --out-voxels writes: occupied, free or all (default)
+  --threads N           threads that walk the rays of each cloud (default 1); the map is the
+                        same for every N
 exit status: 0 success, 2 bad input (one line on stderr naming the file and the problem).
 )";
 }
 
 inline int run_map(const std::vector<std::string>& argv) {
-  const Args args(
-      argv, {"--input", "--res", "--model", "--max-range", "--crop", "--out-voxels", "--voxels"},
-      {"--discretize"});
+  const Args args(argv,
+                  {"--input", "--res", "--model", "--max-range", "--crop", "--out-voxels",
+                   "--voxels", "--threads"},
+                  {"--discretize"});
   if (args.help()) {
     std::fputs(map_help(), stdout);
     return 0;
@@ -71,10 +74,14 @@ inline int run_map(const std::vector<std::string>& argv) {
   if (which != "all" && which != "occupied" && which != "free")
     throw UsageError("--voxels must be occupied, free or all, got '" + which + "'");
   const bool discretize = args.flag("--discretize");
+  const long threads = args.integer("--threads", 1);
+  if (threads < 1 || threads > 1024)
+    throw UsageError("--threads must be an integer from 1 to 1024, got '" + args.str("--threads") +
+                     "'");
 
   const auto t0 = std::chrono::steady_clock::now();
   OccupancyMap<OcKey> map(res);
-  ScanInserter<OcKey> inserter(map);
+  ScanInserter<OcKey> inserter(map, {}, static_cast<unsigned>(threads));
   ScanStats total;
   std::size_t clouds = 0;
   std::vector<Point3f> world;

@@ -12,6 +12,23 @@
 
 namespace knnocc {
 
+namespace detail {
+
+/// Bits set in x. __builtin_popcountll is a library call unless the target has POPCNT (baseline
+/// x86-64 does not), so portable SWAR code is used there.
+inline int popcount64(std::uint64_t x) {
+#if defined(__POPCNT__) || defined(__aarch64__)
+  return __builtin_popcountll(x);
+#else
+  x = x - ((x >> 1) & 0x5555555555555555ULL);
+  x = (x & 0x3333333333333333ULL) + ((x >> 2) & 0x3333333333333333ULL);
+  x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0fULL;
+  return static_cast<int>((x * 0x0101010101010101ULL) >> 56);
+#endif
+}
+
+}  // namespace detail
+
 inline constexpr int kBrickBits = 3;                ///< log2 of the brick edge
 inline constexpr int kBrickEdge = 1 << kBrickBits;  ///< voxels per brick edge (8)
 inline constexpr int kBrickVoxels = kBrickEdge * kBrickEdge * kBrickEdge;  ///< 512
@@ -31,7 +48,7 @@ struct VoxelMask {
   }
   int count() const {
     int n = 0;
-    for (auto x : w) n += __builtin_popcountll(x);
+    for (auto x : w) n += detail::popcount64(x);
     return n;
   }
   /// Calls f(local_index) for every set bit, in increasing order.

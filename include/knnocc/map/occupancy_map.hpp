@@ -188,6 +188,17 @@ class OccupancyMap {
     return nv;
   }
 
+  /// update_voxel(b, i, delta) for every voxel i in `mask` (a whole scan's hits or misses of one
+  /// brick): the same float operations voxel by voxel, with the known mask and count updated a
+  /// word at a time.
+  void update_masked(Brick& b, const VoxelMask& mask, float delta) {
+    if (change_detection_) {  // per-voxel bookkeeping
+      mask.for_each([&](int i) { update_voxel(b, i, delta); });
+      return;
+    }
+    known_count_ += update_brick(b, mask, delta);
+  }
+
   // ---- iteration -----------------------------------------------------------------------------
 
   /// Calls f(key, logodds) for every known finest-level voxel (in storage order).
@@ -227,7 +238,17 @@ class OccupancyMap {
 
   VoxelCounts count_voxels() const {
     VoxelCounts c;
-    for_each_voxel([&](const Key&, float v) { (is_occupied(v) ? c.occupied : c.free)++; });
+    for (const Brick& b : bricks_) {  // per brick, no key built per voxel
+      const auto known = static_cast<std::size_t>(b.known.count());
+      std::size_t occupied = 0;
+      if (!b.values)
+        occupied = is_occupied(b.uniform) ? known : 0;
+      else
+        b.known.for_each(
+            [&](int i) { occupied += is_occupied(b.values[static_cast<std::size_t>(i)]); });
+      c.occupied += occupied;
+      c.free += known - occupied;
+    }
     return c;
   }
 
@@ -293,6 +314,49 @@ class OccupancyMap {
 
   /// The brick with packed coordinate `coord`, created when missing.
   Brick& brick_for_write(std::uint64_t coord) { return bricks_[brick_slot_for_write(coord)]; }
+
+  /// Slot of the brick with packed coordinate `coord`; a missing brick is created empty, without
+  /// its value array (update_brick allocates it), so that creation stays cheap and serial while
+  /// the updates run in parallel. Slots stay valid until clear().
+  std::uint32_t brick_slot(std::uint64_t coord) {
+    bool inserted = false;
+    const auto next = static_cast<std::uint32_t>(bricks_.size());
+    const std::uint32_t slot = index_.find_or_insert(coord, next, inserted);
+    if (inserted) bricks_.emplace_back().coord = coord;
+    return slot;
+  }
+  Brick& brick_at(std::uint32_t slot) { return bricks_[slot]; }
+
+  /// update_voxel(b, i, delta) for every voxel i in `mask`, without change detection (callers
+  /// check change_detection_enabled()) and without the map's voxel count: returns the number of
+  /// voxels that became known, for add_known(). Touches nothing but `b`, so different bricks may
+  /// be updated from different threads at once.
+  std::size_t update_brick(Brick& b, const VoxelMask& mask, float delta) {
+    if (!b.values) {  // a compacted (or new, empty) brick: give it its value array first
+      b.values.reset(new float[kBrickVoxels]);
+      // Values of unknown voxels are never read, so a new brick needs no filling.
+      if (b.known.any()) std::fill(b.values.get(), b.values.get() + kBrickVoxels, b.uniform);
+    }
+    float* values = b.values.get();
+    const float fresh = clamp(0.0f + delta);  // a voxel seen for the first time
+    const bool up = delta >= 0, down = delta <= 0;
+    std::size_t added = 0;
+    for (std::size_t j = 0; j < mask.w.size(); ++j) {
+      const std::uint64_t known = b.known.w[j];
+      for (std::uint64_t m = mask.w[j]; m; m &= m - 1) {
+        const int bit = __builtin_ctzll(m);
+        float& v = values[j * 64 + static_cast<std::size_t>(bit)];
+        if (!((known >> bit) & 1))
+          v = fresh;
+        else if (!((up && v >= params_.clamp_max) || (down && v <= params_.clamp_min)))
+          v = clamp(v + delta);  // OctoMap's early abort at the bound, else add and clamp
+      }
+      added += static_cast<std::size_t>(detail::popcount64(mask.w[j] & ~known));
+      b.known.w[j] = known | mask.w[j];
+    }
+    return added;
+  }
+  void add_known(std::size_t voxels) { known_count_ += voxels; }
   const Brick* find_brick(std::uint64_t coord) const {
     const std::uint32_t slot = index_.find(coord);
     return slot == detail::FlatIndex::kNone ? nullptr : &bricks_[slot];

@@ -13,23 +13,61 @@
 // Bad points never reach the map: NaN/Inf points are skipped and counted; an endpoint outside
 // the key range gets no occupied update and no ray (OctoMap's behaviour), and is counted.
 //
-// The per-scan bookkeeping is a mask per touched brick (no hash set of keys), kept between scans
-// so a warmed-up inserter allocates nothing per point. One inserter per thread.
+// One scan in three passes, each split between the threads (ScanInserter's `threads`):
+//   1. collect: per point the max-range rule, the ray's end point and the hit key; the key box of
+//      the scan. Threads take equal shares of the points (when the point container has random
+//      access).
+//   2. walk: every ray marks its voxels in a per-scan scratch: a dense bit per voxel of the box
+//      (detail/scan_bitmap.hpp) walked four rays at a time (detail/ray_lanes.hpp) when the box
+//      is small enough, else a hashed mask per touched brick. Each thread takes chunks of rays
+//      into its own scratch; free and occupied are unions, so the result does not depend on
+//      which thread walked which ray.
+//   3. apply: the touched bricks with the thread scratches OR-ed, gathered in z, y, x brick order
+//      whatever the path or thread count; the missing map bricks created in that order (one
+//      thread), then every touched voxel updated exactly once, occupied first (each brick by one
+//      thread).
+// The scratch is kept between scans, so a warmed-up inserter allocates nothing per scan.
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <iterator>
+#include <memory>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "../core/config.hpp"
 #include "../core/point3.hpp"
 #include "../core/point_traits.hpp"
 #include "../detail/flat_index.hpp"
+#include "../detail/key_rounding.hpp"
+#include "../detail/ray_lanes.hpp"
+#include "../detail/scan_bitmap.hpp"
+#include "../detail/thread_pool.hpp"
 #include "../raycast/dda.hpp"
 #include "../sensor/octomap_model.hpp"
 #include "occupancy_map.hpp"
 
+// The per-point helpers of collect() must inline into its loop (vector ends and the box stay in
+// registers); GCC would otherwise call them.
+#if defined(__GNUC__) || defined(__clang__)
+#define KNNOCC_ALWAYS_INLINE __attribute__((always_inline)) inline
+#else
+#define KNNOCC_ALWAYS_INLINE inline
+#endif
+
 namespace knnocc {
+
+namespace detail {
+template <class T, class = void>
+struct has_size : std::false_type {};
+template <class T>
+struct has_size<T, std::void_t<decltype(std::declval<const T&>().size())>> : std::true_type {};
+}  // namespace detail
 
 /// What one insert_point_cloud call did.
 struct ScanStats {
@@ -48,10 +86,33 @@ class ScanInserter {
  public:
   using map_type = OccupancyMap<Key>;
 
-  explicit ScanInserter(map_type& map, Model model = {}) : map_(&map), model_(model) {}
+  /// threads: how many threads walk the rays of a scan (>= 1; the calling thread is one of them).
+  /// The map is the same for every thread count.
+  explicit ScanInserter(map_type& map, Model model = {}, unsigned threads = 1)
+      : map_(&map), model_(model) {
+    set_threads(threads);
+  }
+  ScanInserter(ScanInserter&&) noexcept = default;  // movable, not copyable (threads, scratch)
+  ScanInserter& operator=(ScanInserter&&) noexcept = default;
 
   const Model& model() const { return model_; }
   map_type& map() { return *map_; }
+
+  unsigned threads() const { return threads_; }
+  /// Threads for the following scans (>= 1; 0 is rejected with std::invalid_argument).
+  void set_threads(unsigned threads) {
+    if (threads < 1) detail::invalid_argument("threads must be >= 1");
+    if (threads == threads_) return;
+    threads_ = threads;
+    pool_.reset();
+    while (workers_.size() < threads_) workers_.push_back(std::make_unique<Worker>());
+  }
+
+  /// Address space the dense per-scan scratch may take, all threads together (default 256 MB;
+  /// pages no ray touches stay unmapped, so resident memory is usually far less). A scan whose
+  /// box needs more uses the hashed scratch (slower, same map); 0 always does.
+  void set_scratch_limit(std::size_t bytes) { scratch_limit_ = bytes; }
+  std::size_t scratch_limit() const { return scratch_limit_; }
 
   /// Inserts one scan of world-frame points seen from `origin`. max_range < 0: no limit;
   /// max_range == 0 or NaN is rejected (std::invalid_argument; abort without exceptions).
@@ -61,56 +122,85 @@ class ScanInserter {
     if (max_range == 0.0 || std::isnan(max_range))
       detail::invalid_argument("max_range must be > 0, or < 0 for no limit");
     ScanStats st;
-    const Point3f o{static_cast<float>(point_x(origin)), static_cast<float>(point_y(origin)),
-                    static_cast<float>(point_z(origin))};
-    if (!detail::finite(o)) {
+    origin_ = Point3f{static_cast<float>(point_x(origin)), static_cast<float>(point_y(origin)),
+                      static_cast<float>(point_z(origin))};
+    if (!detail::finite(origin_)) {
       st.origin_valid = false;
       for (const auto& p : points) (void)p, ++st.points;
       return st;
     }
-    const Grid<Key>& grid = map_->grid();
-    if (discretize) {
-      endpoints_.clear();
-      for (const auto& p : points) {
-        ++st.points;
-        const Point3f q = to_point3f(p);
-        Key k;
-        if (!detail::finite(q))
-          ++st.nonfinite;
-        else if (!grid.point_to_key(q, k))
-          ++st.out_of_range;
-        else
-          endpoints_.push_back(k.pack());
-      }
-      std::sort(endpoints_.begin(), endpoints_.end());
-      endpoints_.erase(std::unique(endpoints_.begin(), endpoints_.end()), endpoints_.end());
-      for (const std::uint64_t packed : endpoints_) {
-        const Key k = Key::unpack(packed);
-        integrate(o,
-                  Point3f{static_cast<float>(grid.index_to_coord(k[0])),
-                          static_cast<float>(grid.index_to_coord(k[1])),
-                          static_cast<float>(grid.index_to_coord(k[2]))},
-                  max_range, st);
-      }
-    } else {
-      for (const auto& p : points) {
-        ++st.points;
-        const Point3f q = to_point3f(p);
-        if (!detail::finite(q)) {
-          ++st.nonfinite;
-          continue;
-        }
-        integrate(o, q, max_range, st);
-      }
-    }
-    apply(st);
+    collect(points, max_range, discretize, st);
+    if (hits_total_ == 0 && rays_total_ == 0) return st;
+    if (dense_fits())
+      walk_dense(st);
+    else
+      walk_hashed(st);
     return st;
   }
 
  private:
-  struct Scratch {
+  using layout = BrickLayout<Key>;
+
+  // A ray that visits at least one voxel; its end voxel as plain integers (a Key rebuilt
+  // through memory per point made the CPU wait on narrower stores).
+  using Ray = detail::RayEnd;
+  struct BrickUpdate {  // one touched brick of this scan and, once created, its map slot
+    std::uint64_t coord;
+    std::uint32_t slot;
+    VoxelMask hit, miss;
+  };
+  struct Scratch {  // hashed path: one touched brick
     std::uint64_t coord = 0;
     VoxelMask hit, miss;
+  };
+  // What one thread collected from its share of the points.
+  struct Part {
+    std::vector<Ray> rays;                // the rays that visit at least one voxel
+    std::vector<std::uint64_t> hits;      // occupied endpoint keys, packed
+    std::int64_t key_min[3], key_max[3];  // key box of origin, ray ends and hits
+    std::size_t steps = 0;                // sum of |end - origin|_1 over the rays
+    ScanStats st;                         // points, nonfinite, out_of_range, beyond_max_range
+
+    void clear() {
+      rays.clear();
+      hits.clear();
+      steps = 0;
+      st = ScanStats{};
+    }
+  };
+
+  // One thread's scratch (separate allocations, so threads do not share cache lines).
+  struct Worker {
+    detail::ScanBitmap miss;  // dense path
+    detail::FlatIndex index;  // hashed path: brick coordinate -> slot in scratch
+    std::vector<Scratch> scratch;
+    std::size_t used = 0;
+    std::uint64_t last_coord = 0;
+    std::uint32_t last = detail::FlatIndex::kNone;
+    std::size_t visits = 0;
+    std::vector<VoxelMask> row_hit, row_miss;       // dense apply: one brick row
+    std::size_t occupied = 0, free = 0, added = 0;  // apply: this thread's updates
+    Part part;                                      // collect: this thread's share
+
+    Scratch& scratch_for(std::uint64_t c) {
+      if (last != detail::FlatIndex::kNone && c == last_coord) return scratch[last];
+      bool inserted = false;
+      last = index.find_or_insert(c, static_cast<std::uint32_t>(used), inserted);
+      last_coord = c;
+      if (inserted) {
+        if (used == scratch.size()) scratch.emplace_back();
+        Scratch& s = scratch[used++];
+        s.coord = c;
+        s.hit.clear();
+        s.miss.clear();
+      }
+      return scratch[last];
+    }
+    void reset_hashed() {
+      used = 0;
+      index.clear();
+      last = detail::FlatIndex::kNone;
+    }
   };
 
   template <class P>
@@ -119,72 +209,501 @@ class ScanInserter {
                    static_cast<float>(point_z(p))};
   }
 
-  void integrate(const Point3f& o, const Point3f& p, double max_range, ScanStats& st) {
-    const Grid<Key>& grid = map_->grid();
-    auto mark_free = [&](const Key& k) {
-      ++st.ray_keys;
-      scratch_for(k).miss.set(BrickLayout<Key>::local_of(k));
-    };
-    if (max_range < 0.0 || detail::octomap_norm(p.x - o.x, p.y - o.y, p.z - o.z) <= max_range) {
-      Key k;
-      if (!grid.point_to_key(p, k)) {
-        ++st.out_of_range;  // OctoMap's ray check fails on the same endpoint
-        return;
+  // ---- 1. collect -----------------------------------------------------------------------
+
+  // OctoMap's computeUpdate, point by point, into one Part.
+  struct Collector {
+    const Point3f origin;
+    const std::int32_t (&origin_key)[3];
+    const bool origin_in_range;
+    const double max_range;
+    const detail::KeyRounding<Key> rounding;
+    Part& part;
+
+    template <class It>
+    void add_points(It first, It last) {
+      for (; first != last; ++first) {
+        ++part.st.points;
+        const Point3f q = to_point3f(*first);
+        if (!detail::finite(q)) {
+          ++part.st.nonfinite;
+          continue;
+        }
+        add(q);
       }
-      for_each_ray_key(grid, o, p, mark_free);
-      scratch_for(k).hit.set(BrickLayout<Key>::local_of(k));
+    }
+
+    KNNOCC_ALWAYS_INLINE void add(const Point3f& p) {
+      const Point3f& o = origin;
+      std::int64_t k[3];
+      if (max_range < 0.0 || detail::octomap_norm(p.x - o.x, p.y - o.y, p.z - o.z) <= max_range) {
+        if (!rounding.point_to_key(p, k)) {
+          ++part.st.out_of_range;  // OctoMap's ray check fails on the same endpoint
+          return;
+        }
+        part.hits.push_back(pack(k));  // even when the origin is out of range, as OctoMap
+        extend_box(k);
+        add_ray<false>(p, k);  // the box holds k already
+      } else {
+        ++part.st.beyond_max_range;
+        const Point3f e = truncate_ray(o, p, max_range);
+        if (rounding.point_to_key(e, k)) add_ray<true>(e, k);
+      }
+    }
+
+    // Keeps the rays that visit at least one voxel (start_ray() == RayStart::walk).
+    template <bool ExtendBox>
+    KNNOCC_ALWAYS_INLINE void add_ray(const Point3f& end, const std::int64_t (&k)[3]) {
+      if (!origin_in_range ||
+          (k[0] == origin_key[0] && k[1] == origin_key[1] && k[2] == origin_key[2]))
+        return;
+      // Filled in place: a Ray built on the stack and copied made the CPU reload it through
+      // narrower stores.
+      Ray& ray = part.rays.emplace_back();
+      ray.end = end;
+      for (int a = 0; a < 3; ++a) ray.key[a] = static_cast<std::int32_t>(k[a]);
+      if (ExtendBox) extend_box(k);
+      part.steps += static_cast<std::size_t>(std::llabs(k[0] - origin_key[0]) +
+                                             std::llabs(k[1] - origin_key[1]) +
+                                             std::llabs(k[2] - origin_key[2]));
+    }
+
+    KNNOCC_ALWAYS_INLINE void extend_box(const std::int64_t (&k)[3]) {
+      for (int a = 0; a < 3; ++a) {
+        part.key_min[a] = std::min(part.key_min[a], k[a]);
+        part.key_max[a] = std::max(part.key_max[a], k[a]);
+      }
+    }
+  };
+
+  static std::uint64_t pack(const std::int64_t (&k)[3]) {  // Key::pack()
+    return (static_cast<std::uint64_t>(k[0]) << (2 * Key::depth)) |
+           (static_cast<std::uint64_t>(k[1]) << Key::depth) | static_cast<std::uint64_t>(k[2]);
+  }
+
+  template <class Points>
+  using iterator_of = decltype(std::begin(std::declval<const Points&>()));
+
+  // Fills the workers' Parts (in parallel when the points allow random access) and merges their
+  // boxes and counts: the scan's rays are the union of all Parts' rays.
+  template <class Points>
+  void collect(const Points& points, double max_range, bool discretize, ScanStats& st) {
+    const Grid<Key>& grid = map_->grid();
+    Key ko;
+    origin_in_range_ = grid.point_to_key(origin_, ko);
+    for (int a = 0; a < 3; ++a) origin_key_[a] = ko[a];
+    for (unsigned w = 0; w < threads_; ++w) {
+      Part& part = workers_[w]->part;
+      part.clear();
+      for (int a = 0; a < 3; ++a) {
+        part.key_min[a] = origin_in_range_ ? origin_key_[a] : Key::extent;
+        part.key_max[a] = origin_in_range_ ? origin_key_[a] : -1;
+      }
+    }
+    auto collector = [&](unsigned w) {
+      return Collector{origin_,
+                       origin_key_,
+                       origin_in_range_,
+                       max_range,
+                       detail::KeyRounding<Key>(grid),
+                       workers_[w]->part};
+    };
+
+    using It = iterator_of<Points>;
+    constexpr bool random_access =
+        std::is_base_of_v<std::random_access_iterator_tag,
+                          typename std::iterator_traits<It>::iterator_category>;
+    if (discretize) {
+      collect_discretized(points, collector(0));
+    } else if constexpr (random_access) {
+      const It first = std::begin(points);
+      const auto n = static_cast<std::size_t>(std::distance(first, std::end(points)));
+      // Threads only for scans large enough to pay for waking them.
+      const unsigned parts = n >= 8192 ? threads_ : 1;
+      auto job = [&](unsigned w) {
+        if (w >= parts) return;
+        Part& part = workers_[w]->part;
+        const std::size_t a = n * w / parts, b = n * (w + 1) / parts;
+        part.rays.reserve(b - a);  // one allocation, not a doubling series
+        part.hits.reserve(b - a);
+        collector(w).add_points(first + static_cast<std::ptrdiff_t>(a),
+                                first + static_cast<std::ptrdiff_t>(b));
+      };
+      if (parts == 1)
+        job(0u);
+      else
+        run(job);
     } else {
-      ++st.beyond_max_range;
-      for_each_ray_key(grid, o, truncate_ray(o, p, max_range), mark_free);
+      collector(0).add_points(std::begin(points), std::end(points));
+    }
+
+    steps_ = 0;
+    rays_total_ = hits_total_ = 0;
+    for (int a = 0; a < 3; ++a) {
+      key_min_[a] = Key::extent;
+      key_max_[a] = -1;
+    }
+    for (unsigned w = 0; w < threads_; ++w) {
+      const Part& part = workers_[w]->part;
+      steps_ += part.steps;
+      rays_total_ += part.rays.size();
+      hits_total_ += part.hits.size();
+      for (int a = 0; a < 3; ++a) {
+        key_min_[a] = std::min(key_min_[a], part.key_min[a]);
+        key_max_[a] = std::max(key_max_[a], part.key_max[a]);
+      }
+      st.points += part.st.points;
+      st.nonfinite += part.st.nonfinite;
+      st.out_of_range += part.st.out_of_range;
+      st.beyond_max_range += part.st.beyond_max_range;
     }
   }
 
-  Scratch& scratch_for(const Key& k) {
-    const std::uint64_t c = BrickLayout<Key>::brick_of(k);
-    if (last_ != detail::FlatIndex::kNone && c == last_coord_) return scratch_[last_];
-    bool inserted = false;
-    const auto next = static_cast<std::uint32_t>(used_);
-    last_ = index_.find_or_insert(c, next, inserted);
-    last_coord_ = c;
-    if (inserted) {
-      if (used_ == scratch_.size()) scratch_.emplace_back();
-      Scratch& s = scratch_[used_++];
-      s.coord = c;
-      s.hit.clear();
-      s.miss.clear();
+  // discretize: the distinct endpoint voxels, then their centres as the points (in one thread).
+  template <class Points>
+  void collect_discretized(const Points& points, Collector c) {
+    const Grid<Key>& grid = map_->grid();
+    endpoints_.clear();
+    for (const auto& p : points) {
+      ++c.part.st.points;
+      const Point3f q = to_point3f(p);
+      std::int64_t k[3];
+      if (!detail::finite(q))
+        ++c.part.st.nonfinite;
+      else if (!c.rounding.point_to_key(q, k))
+        ++c.part.st.out_of_range;
+      else
+        endpoints_.push_back(pack(k));
     }
-    return scratch_[last_];
+    std::sort(endpoints_.begin(), endpoints_.end());
+    endpoints_.erase(std::unique(endpoints_.begin(), endpoints_.end()), endpoints_.end());
+    for (const std::uint64_t packed : endpoints_) {
+      const Key k = Key::unpack(packed);
+      c.add(Point3f{static_cast<float>(grid.index_to_coord(k[0])),
+                    static_cast<float>(grid.index_to_coord(k[1])),
+                    static_cast<float>(grid.index_to_coord(k[2]))});
+    }
+  }
+
+  // ---- 2. walk --------------------------------------------------------------------------
+
+  // Bits of dense scratch per ray step at most: beyond that, clearing and scanning the bitmap
+  // would cost more than walking the rays.
+  static constexpr std::int64_t kDenseBitsPerStep = 64;
+  // The dense box is the key box of origin and end points grown by one voxel: per axis a walk
+  // moves monotonically from the origin voxel and may pass the end voxel's border by rounding
+  // (a crossing computed within the length), but never a second border: that would take an error
+  // of a whole voxel in t, while the float direction and length err by about 1e-6 of the ray
+  // length, under 0.2 voxel for the rays of a box edge below 2^16 voxels + 64.
+  static constexpr std::int64_t kDenseMaxEdge = (std::int64_t{1} << 16) + 64;
+
+  // Chooses the dense path and shapes its box: the key box grown by one voxel, brick aligned.
+  bool dense_fits() {
+    std::int64_t bits = 1;
+    for (int a = 0; a < 3; ++a) {
+      if (key_min_[a] < 1 || key_max_[a] > Key::extent - 2) return false;  // stay in key range
+      box_lo_[a] = (key_min_[a] - 1) / kBrickEdge * kBrickEdge;
+      const std::int64_t end = ((key_max_[a] + 1) / kBrickEdge + 1) * kBrickEdge;
+      // Rows along x are whole 64-bit words (ScanBitmap::take_brick_row reads them so).
+      const std::int64_t align = a == 0 ? 64 : kBrickEdge;
+      box_size_[a] = (end - box_lo_[a] + align - 1) / align * align;
+      if (box_size_[a] > kDenseMaxEdge) return false;
+      bits *= box_size_[a];
+    }
+    // One bitmap per thread for the free voxels, one for the occupied.
+    const double bytes = static_cast<double>(bits) / 8 * (threads_ + 1);
+    return bytes <= static_cast<double>(scratch_limit_) &&
+           bits <= kDenseBitsPerStep * static_cast<std::int64_t>(steps_) + (std::int64_t{1} << 20);
+  }
+
+  void walk_dense(ScanStats& st) {
+    hit_bits_.reshape(box_lo_, box_size_);
+    for (unsigned w = 0; w < threads_; ++w)
+      for (const std::uint64_t packed : workers_[w]->part.hits) {
+        const Key k = Key::unpack(packed);
+        detail::set_bit(hit_bits_.words(), hit_bits_.index(k[0], k[1], k[2]));
+      }
+    for (unsigned w = 0; w < threads_; ++w) workers_[w]->miss.reshape(box_lo_, box_size_);
+
+    plan_chunks();
+    const detail::RayFan fan(map_->grid(), origin_, origin_key_, box_lo_,
+                             {1, box_size_[0], box_size_[0] * box_size_[1]});
+    auto job = [&](unsigned w) {
+      Worker& worker = *workers_[w];
+      // Rays are set up a batch at a time: independent set-ups (divisions, a square root)
+      // overlap in the CPU, and go four at a time on AVX2 machines.
+      constexpr std::size_t kBatch = 16;
+      detail::LinearRay batch[kBatch];
+      std::size_t have = 0, taken = 0;
+      const Ray *pos = nullptr, *stop = nullptr;
+      auto next = [&](detail::LinearRay& r) {
+        if (taken == have) {
+          if (pos == stop && !next_rays(pos, stop)) return false;
+          have = std::min(kBatch, static_cast<std::size_t>(stop - pos));
+          detail::setup_linear_rays(map_->grid(), fan, pos, have, batch);
+          pos += have;
+          taken = 0;
+        }
+        r = batch[taken++];
+        return true;
+      };
+      worker.visits = detail::walk_linear_rays(next, worker.miss.words());
+    };
+    run(job);
+    for (unsigned w = 0; w < threads_; ++w) st.ray_keys += workers_[w]->visits;
+    apply_dense(st);
+  }
+
+  void walk_hashed(ScanStats& st) {
+    for (unsigned w = 0; w < threads_; ++w) workers_[w]->reset_hashed();
+    Worker& first = *workers_[0];
+    for (unsigned w = 0; w < threads_; ++w)
+      for (const std::uint64_t packed : workers_[w]->part.hits) {
+        const Key k = Key::unpack(packed);
+        first.scratch_for(layout::brick_of(k)).hit.set(layout::local_of(k));
+      }
+
+    plan_chunks();
+    auto job = [&](unsigned w) {
+      BrickCursor cursor{{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, workers_[w].get()};
+      for (const Ray *pos, *stop; next_rays(pos, stop);)
+        for (; pos != stop; ++pos) {
+          int step[3];
+          WalkState state;
+          detail::setup_walk(map_->grid(), origin_, pos->end, origin_key_, pos->key, step, state);
+          cursor.start(origin_key_, step, pos->key);
+          cursor.visit();  // the origin voxel
+          walk_ray(state, cursor);
+        }
+      workers_[w]->visits = cursor.visits;
+    };
+    run(job);
+    for (unsigned w = 0; w < threads_; ++w) st.ray_keys += workers_[w]->visits;
+    apply_hashed(st);
+  }
+
+  // walk_ray's cursor for the hashed scratch: per-axis integer keys, with the brick looked up only
+  // when a step leaves it (a Key object per voxel went through memory and stalled the CPU).
+  struct BrickCursor {
+    std::int64_t k[3], dir[3], end[3];
+    Worker* worker;
+    std::size_t visits = 0;
+    VoxelMask* miss = nullptr;  // of k's brick; null after a step into another brick
+
+    void start(const std::int32_t (&from)[3], const int (&step)[3], const std::int32_t (&to)[3]) {
+      for (int a = 0; a < 3; ++a) {
+        k[a] = from[a];
+        dir[a] = step[a];
+        end[a] = to[a];
+      }
+      miss = nullptr;
+    }
+    template <int Axis>
+    void step() {
+      const std::int64_t before = k[Axis];
+      k[Axis] += dir[Axis];
+      if ((k[Axis] ^ before) >> kBrickBits) miss = nullptr;
+    }
+    bool at_end() const { return k[0] == end[0] && k[1] == end[1] && k[2] == end[2]; }
+    bool visit() {
+      // OctoMap only asserts here; a walk that would leave the key range ends instead.
+      if (((k[0] | k[1] | k[2]) & ~(Key::extent - 1)) != 0) return false;
+      if (!miss)
+        miss = &worker
+                    ->scratch_for(layout::pack_brick(k[0] >> kBrickBits, k[1] >> kBrickBits,
+                                                     k[2] >> kBrickBits))
+                    .miss;
+      constexpr std::int64_t m = kBrickEdge - 1;
+      miss->set(static_cast<int>((k[0] & m) | ((k[1] & m) << kBrickBits) |
+                                 ((k[2] & m) << (2 * kBrickBits))));
+      ++visits;
+      return true;
+    }
+  };
+
+  // The rays of all Parts in chunks: small chunks balance the threads (rays differ in length).
+  void plan_chunks() {
+    chunk_ = std::max<std::size_t>(256, std::min<std::size_t>(4096, rays_total_ / 64 + 1));
+    part_chunks_.resize(threads_ + 1);
+    part_chunks_[0] = 0;
+    for (unsigned w = 0; w < threads_; ++w)
+      part_chunks_[w + 1] = part_chunks_[w] + (workers_[w]->part.rays.size() + chunk_ - 1) / chunk_;
+    next_chunk_->store(0, std::memory_order_relaxed);
+  }
+  // Claims the next chunk of rays; false when every chunk is taken.
+  bool next_rays(const Ray*& first, const Ray*& last) {
+    const std::size_t c = next_chunk_->fetch_add(1, std::memory_order_relaxed);
+    if (c >= part_chunks_[threads_]) return false;
+    unsigned w = 0;
+    while (c >= part_chunks_[w + 1]) ++w;
+    const std::vector<Ray>& rays = workers_[w]->part.rays;
+    const std::size_t begin = (c - part_chunks_[w]) * chunk_;
+    first = rays.data() + begin;
+    last = rays.data() + std::min(rays.size(), begin + chunk_);
+    return true;
+  }
+
+  template <class Job>
+  void run(Job& job) {
+    if (threads_ == 1) {
+      job(0u);
+      return;
+    }
+    if (!pool_) pool_ = std::make_unique<detail::ThreadPool>(threads_);
+    pool_->run(job);
+  }
+
+  // ---- 3. apply -------------------------------------------------------------------------
+  //
+  // Gather: the touched bricks with their masks, in groups whose concatenation is z, y, x brick
+  // order. Create: the map bricks in that order, serially (the map's storage order never depends
+  // on the path or the thread count). Update: every group's bricks, in parallel (each brick is
+  // updated by one thread; the map's voxel count is summed afterwards).
+
+  void apply_dense(ScanStats& st) {
+    const std::int64_t nbx = hit_bits_.bricks(0), nby = hit_bits_.bricks(1),
+                       rows = nby * hit_bits_.bricks(2);
+    const std::int64_t* lo = hit_bits_.lo();
+    const auto groups = static_cast<std::size_t>(
+        std::min<std::int64_t>(rows, threads_ == 1 ? 1 : 8 * std::int64_t{threads_}));
+    const auto rows_per_group = (static_cast<std::size_t>(rows) + groups - 1) / groups;
+    start_groups(groups);
+    for (unsigned w = 0; w < threads_; ++w) {  // here, not in the job: a thread may get no group
+      workers_[w]->row_hit.resize(static_cast<std::size_t>(nbx));
+      workers_[w]->row_miss.resize(static_cast<std::size_t>(nbx));
+    }
+    auto gather = [&](unsigned w) {
+      Worker& worker = *workers_[w];
+      for (std::size_t g; (g = next_chunk_->fetch_add(1, std::memory_order_relaxed)) < groups;) {
+        const auto first = static_cast<std::int64_t>(g * rows_per_group);
+        const auto last = std::min(rows, static_cast<std::int64_t>((g + 1) * rows_per_group));
+        for (std::int64_t row = first; row < last; ++row) {  // rows differ: no shared words
+          const std::int64_t by = row % nby, bz = row / nby;
+          hit_bits_.take_brick_row(by, bz, worker.row_hit.data());
+          for (unsigned t = 0; t < threads_; ++t)
+            workers_[t]->miss.take_brick_row(by, bz, worker.row_miss.data());
+          for (std::int64_t bx = 0; bx < nbx; ++bx) {
+            VoxelMask& hit = worker.row_hit[static_cast<std::size_t>(bx)];
+            VoxelMask& miss = worker.row_miss[static_cast<std::size_t>(bx)];
+            if (!hit.any() && !miss.any()) continue;
+            groups_[g].push_back(
+                {layout::pack_brick((lo[0] >> kBrickBits) + bx, (lo[1] >> kBrickBits) + by,
+                                    (lo[2] >> kBrickBits) + bz),
+                 0, hit, miss});
+            hit.clear();
+            miss.clear();
+          }
+        }
+      }
+    };
+    run(gather);
+    hit_bits_.mark_clean();
+    for (unsigned w = 0; w < threads_; ++w) workers_[w]->miss.mark_clean();
+    update_groups(st);
+  }
+
+  void apply_hashed(ScanStats& st) {
+    Worker& first = *workers_[0];
+    for (unsigned w = 1; w < threads_; ++w) {  // OR the other threads' masks into the first's
+      Worker& other = *workers_[w];
+      for (std::size_t j = 0; j < other.used; ++j) {
+        Scratch& into = first.scratch_for(other.scratch[j].coord);
+        for (std::size_t i = 0; i < into.miss.w.size(); ++i)
+          into.miss.w[i] |= other.scratch[j].miss.w[i];
+      }
+      other.reset_hashed();
+    }
+    order_.clear();
+    for (std::size_t j = 0; j < first.used; ++j) order_.push_back(static_cast<std::uint32_t>(j));
+    auto zyx = [&](std::uint32_t j) {
+      const auto o = layout::origin_of(first.scratch[j].coord);
+      return std::array<std::int64_t, 3>{o[2], o[1], o[0]};
+    };
+    std::sort(order_.begin(), order_.end(),
+              [&](std::uint32_t a, std::uint32_t b) { return zyx(a) < zyx(b); });
+    constexpr std::size_t kGroup = 256;
+    start_groups((order_.size() + kGroup - 1) / kGroup);
+    for (std::size_t k = 0; k < order_.size(); ++k) {
+      const Scratch& sc = first.scratch[order_[k]];
+      groups_[k / kGroup].push_back({sc.coord, 0, sc.hit, sc.miss});
+    }
+    first.reset_hashed();
+    update_groups(st);
+  }
+
+  void start_groups(std::size_t groups) {
+    if (groups_.size() < groups) groups_.resize(groups);
+    for (std::size_t g = 0; g < groups; ++g) groups_[g].clear();
+    group_count_ = groups;
+    next_chunk_->store(0, std::memory_order_relaxed);
   }
 
   // Occupied wins; every touched voxel gets exactly one update.
-  void apply(ScanStats& st) {
-    const float hit = model_.hit_logodds(), miss = model_.miss_logodds();
-    for (std::size_t j = 0; j < used_; ++j) {
-      Scratch& s = scratch_[j];
-      auto& brick = map_->brick_for_write(s.coord);
-      s.hit.for_each([&](int i) {
-        map_->update_voxel(brick, i, hit);
-        ++st.occupied_voxels;
-      });
-      for (std::size_t w = 0; w < s.miss.w.size(); ++w) s.miss.w[w] &= ~s.hit.w[w];
-      s.miss.for_each([&](int i) {
-        map_->update_voxel(brick, i, miss);
-        ++st.free_voxels;
-      });
+  void update_groups(ScanStats& st) {
+    for (std::size_t g = 0; g < group_count_; ++g)
+      for (BrickUpdate& u : groups_[g]) {
+        u.slot = map_->brick_slot(u.coord);
+        for (std::size_t i = 0; i < u.miss.w.size(); ++i) u.miss.w[i] &= ~u.hit.w[i];
+      }
+    const float hit_l = model_.hit_logodds(), miss_l = model_.miss_logodds();
+    if (map_->change_detection_enabled()) {  // records per voxel, in one thread
+      for (std::size_t g = 0; g < group_count_; ++g)
+        for (const BrickUpdate& u : groups_[g]) {
+          auto& brick = map_->brick_at(u.slot);
+          map_->update_masked(brick, u.hit, hit_l);
+          map_->update_masked(brick, u.miss, miss_l);
+          st.occupied_voxels += static_cast<std::size_t>(u.hit.count());
+          st.free_voxels += static_cast<std::size_t>(u.miss.count());
+        }
+      return;
     }
-    used_ = 0;
-    index_.clear();
-    last_ = detail::FlatIndex::kNone;
+    next_chunk_->store(0, std::memory_order_relaxed);
+    auto update = [&](unsigned w) {
+      Worker& worker = *workers_[w];
+      worker.occupied = worker.free = worker.added = 0;
+      for (std::size_t g;
+           (g = next_chunk_->fetch_add(1, std::memory_order_relaxed)) < group_count_;)
+        for (const BrickUpdate& u : groups_[g]) {
+          auto& brick = map_->brick_at(u.slot);
+          worker.added += map_->update_brick(brick, u.hit, hit_l);
+          worker.added += map_->update_brick(brick, u.miss, miss_l);
+          worker.occupied += static_cast<std::size_t>(u.hit.count());
+          worker.free += static_cast<std::size_t>(u.miss.count());
+        }
+    };
+    run(update);
+    for (unsigned w = 0; w < threads_; ++w) {
+      st.occupied_voxels += workers_[w]->occupied;
+      st.free_voxels += workers_[w]->free;
+      map_->add_known(workers_[w]->added);
+    }
   }
 
   map_type* map_;
   Model model_;
-  detail::FlatIndex index_;       // brick coordinate -> scratch slot, this scan
-  std::vector<Scratch> scratch_;  // grows to the largest scan seen, then reused
-  std::size_t used_ = 0;
-  std::uint64_t last_coord_ = 0;
-  std::uint32_t last_ = detail::FlatIndex::kNone;
-  std::vector<std::uint64_t> endpoints_;  // discretize: distinct endpoint keys
+  unsigned threads_ = 0;
+  std::size_t scratch_limit_ = std::size_t{256} << 20;
+  std::unique_ptr<detail::ThreadPool> pool_;      // created on the first multithreaded scan
+  std::vector<std::unique_ptr<Worker>> workers_;  // [0] is the calling thread's
+  // Next chunk of work to take (on the heap so that the inserter stays movable).
+  std::unique_ptr<std::atomic<std::size_t>> next_chunk_ =
+      std::make_unique<std::atomic<std::size_t>>(0);
+
+  // This scan (kept between scans for their memory).
+  Point3f origin_;
+  std::int32_t origin_key_[3] = {0, 0, 0};
+  bool origin_in_range_ = false;
+  std::size_t rays_total_ = 0, hits_total_ = 0;  // over all Parts
+  std::vector<std::size_t> part_chunks_;         // first chunk of each Part (prefix sums)
+  std::size_t chunk_ = 1;                        // rays per chunk
+  std::vector<std::uint64_t> endpoints_;         // discretize: distinct endpoint keys
+  std::size_t steps_ = 0;                        // sum of |end - origin|_1 over the rays
+  std::int64_t key_min_[3] = {0, 0, 0}, key_max_[3] = {0, 0, 0};
+  std::int64_t box_lo_[3] = {0, 0, 0}, box_size_[3] = {0, 0, 0};
+  detail::ScanBitmap hit_bits_;
+  std::vector<std::vector<BrickUpdate>> groups_;  // touched bricks, z, y, x order overall
+  std::size_t group_count_ = 0;
+  std::vector<std::uint32_t> order_;  // hashed path: scratch slots in z, y, x order
 };
 
 /// One-shot convenience: OctoMap's insertPointCloud with the default model. For many scans keep
@@ -198,3 +717,5 @@ ScanStats insert_point_cloud(OccupancyMap<Key>& map, const Origin& origin, const
 }
 
 }  // namespace knnocc
+
+#undef KNNOCC_ALWAYS_INLINE

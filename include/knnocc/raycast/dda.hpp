@@ -7,9 +7,19 @@
 // The result is a 6-connected walk. Compile with -ffp-contract=off when FMA instructions are
 // enabled (-march=native): fused multiply-adds change the last bit of borders and of the max-range
 // end point, and so, rarely, a key.
+//
+// The walk is split in two so that several walkers share OctoMap's arithmetic: setup_walk() (via
+// start_ray()) does the set-up, the one place with OctoMap's float/double rules, and walk_ray()
+// the stepping, with a cursor that decides what a voxel is (a Key here, a bit index or a brick
+// mask in ScanInserter). detail/ray_lanes.hpp holds the four-rays-at-once versions of both,
+// which repeat these operations in the same order (the tests compare them bit for bit). Each
+// axis moves monotonically, one voxel per step, so the walk can stand on the end voxel only after
+// exactly |end - origin|_1 steps: the end test is a countdown, not a key comparison per step.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 #include <vector>
 
@@ -48,54 +58,150 @@ inline Point3f truncate_ray(const Point3f& origin, const Point3f& end, double ma
   return Point3f{origin.x + sx, origin.y + sy, origin.z + sz};
 }
 
+/// The stepping state of a walk: per axis the ray parameter of the next border crossing and the
+/// parameter between two borders, the ray length, and the steps left until the end voxel.
+struct WalkState {
+  double t_max[3];
+  double t_delta[3];
+  double length;              ///< OctoMap's float length, compared in double
+  std::int64_t steps_to_end;  ///< the walk reaches the end voxel only when this hits 0
+};
+
+/// A ray ready to walk: its two voxels, the step direction per axis and the stepping state.
+template <class Key>
+struct RayWalk {
+  Key origin, end;
+  int step[3];  ///< -1, 0 (the ray never crosses this axis' borders) or +1
+  WalkState state;
+};
+
+enum class RayStart {
+  walk,          ///< visit `origin`, then walk_ray()
+  same_voxel,    ///< origin and end share a voxel: no key at all
+  out_of_range,  ///< origin or end not finite or outside the key range (computeRayKeys: false)
+};
+
+namespace detail {
+
+/// OctoMap's computeRayKeys set-up for the segment origin -> end, given the per-axis indices of
+/// their voxels (grid.point_to_key of origin and end; the two voxels differ): the step direction
+/// per axis and the stepping state.
+template <class Key, class Index>
+void setup_walk(const Grid<Key>& grid, const Point3f& origin, const Point3f& end, const Index* ko,
+                const Index* ke, int (&step)[3], WalkState& s) {
+  const float o[3] = {origin.x, origin.y, origin.z};
+  float dir[3] = {end.x - origin.x, end.y - origin.y, end.z - origin.z};
+  const auto length = static_cast<float>(octomap_norm(dir[0], dir[1], dir[2]));
+  for (float& d : dir) d /= length;
+
+  const double res = grid.resolution();
+  s.length = static_cast<double>(length);
+  s.steps_to_end = 0;
+  for (int i = 0; i < 3; ++i) {
+    s.steps_to_end += std::llabs(static_cast<std::int64_t>(ke[i]) - ko[i]);
+    step[i] = dir[i] > 0.0f ? 1 : (dir[i] < 0.0f ? -1 : 0);
+    if (step[i] != 0) {
+      double border = grid.index_to_coord(static_cast<typename Key::index_type>(ko[i]));
+      border += static_cast<float>(step[i] * res * 0.5);  // float half-voxel, as OctoMap
+      s.t_max[i] = (border - static_cast<double>(o[i])) / static_cast<double>(dir[i]);
+      s.t_delta[i] = res / static_cast<double>(std::fabs(dir[i]));
+    } else {
+      s.t_max[i] = std::numeric_limits<double>::max();
+      s.t_delta[i] = std::numeric_limits<double>::max();
+    }
+  }
+}
+
+}  // namespace detail
+
+/// OctoMap's computeRayKeys set-up for the segment origin -> end.
+template <class Key>
+RayStart start_ray(const Grid<Key>& grid, const Point3f& origin, const Point3f& end,
+                   RayWalk<Key>& w) {
+  if (!grid.point_to_key(origin, w.origin) || !grid.point_to_key(end, w.end))
+    return RayStart::out_of_range;
+  if (w.origin.pack() == w.end.pack()) return RayStart::same_voxel;
+  detail::setup_walk(grid, origin, end, w.origin.k.data(), w.end.k.data(), w.step, w.state);
+  return RayStart::walk;
+}
+
+/// Walks from the voxel the cursor stands on (already visited) to the end of the ray:
+///   cursor.step<axis>()  moves one voxel along axis (in the ray's direction);
+///   cursor.at_end()      is the cursor on the end voxel? (asked only when steps_to_end runs out);
+///   cursor.visit()       the walk entered a voxel; returns false to stop (e.g. key range left).
+/// The next axis is the one with the smallest t_max, the higher axis on ties (OctoMap's
+/// `(t0 < t1) ? (t0 < t2 ? 0 : 2) : (t1 < t2 ? 1 : 2)`); the walk ends on the end voxel or
+/// when every next border lies beyond the ray length.
+template <class Cursor>
+void walk_ray(const WalkState& s, Cursor& cursor) {
+  double t0 = s.t_max[0], t1 = s.t_max[1], t2 = s.t_max[2];
+  const double d0 = s.t_delta[0], d1 = s.t_delta[1], d2 = s.t_delta[2], length = s.length;
+  std::int64_t steps = s.steps_to_end;
+  for (;;) {
+    if (t0 < t1) {
+      if (t0 < t2) {
+        t0 += d0;
+        cursor.template step<0>();
+      } else {
+        t2 += d2;
+        cursor.template step<2>();
+      }
+    } else if (t1 < t2) {
+      t1 += d1;
+      cursor.template step<1>();
+    } else {
+      t2 += d2;
+      cursor.template step<2>();
+    }
+    if (--steps == 0 && cursor.at_end()) return;
+    if (std::min(std::min(t0, t1), t2) > length) return;
+    if (!cursor.visit()) return;
+  }
+}
+
+namespace detail {
+
+// walk_ray's cursor for keys: per-axis int64 indices (no Key rebuilt per step until visited).
+template <class Key, class Visit>
+struct KeyCursor {
+  std::int64_t k[3];
+  std::int64_t dir[3];  // -1, 0, +1
+  std::int64_t end[3];
+  Visit& visit_fn;
+
+  template <int Axis>
+  void step() {
+    k[Axis] += dir[Axis];
+  }
+  bool at_end() const { return k[0] == end[0] && k[1] == end[1] && k[2] == end[2]; }
+  bool visit() {
+    // OctoMap only asserts here; a walk that would leave the key range ends instead.
+    if (((k[0] | k[1] | k[2]) & ~(Key::extent - 1)) != 0) return false;
+    using I = typename Key::index_type;
+    const Key key(static_cast<I>(k[0]), static_cast<I>(k[1]), static_cast<I>(k[2]));
+    visit_fn(key);
+    return true;
+  }
+};
+
+}  // namespace detail
+
 /// Calls visit(key) for every voxel the segment origin -> end crosses, origin voxel included,
 /// end voxel excluded. Returns false, visiting nothing, when origin or end is not finite or out
 /// of the key range (OctoMap's computeRayKeys returns false there too).
 template <class Key, class Visit>
 bool for_each_ray_key(const Grid<Key>& grid, const Point3f& origin, const Point3f& end,
                       Visit&& visit) {
-  Key ko, ke;
-  if (!grid.point_to_key(origin, ko) || !grid.point_to_key(end, ke)) return false;
-  if (ko == ke) return true;
-  visit(static_cast<const Key&>(ko));
-
-  const float o[3] = {origin.x, origin.y, origin.z};
-  float dir[3] = {end.x - origin.x, end.y - origin.y, end.z - origin.z};
-  const auto length = static_cast<float>(detail::octomap_norm(dir[0], dir[1], dir[2]));
-  for (float& d : dir) d /= length;
-
-  const double res = grid.resolution();
-  int step[3];
-  double t_max[3], t_delta[3];
-  std::int64_t cur[3], stop[3];
-  for (int i = 0; i < 3; ++i) {
-    cur[i] = ko[i];
-    stop[i] = ke[i];
-    step[i] = dir[i] > 0.0f ? 1 : (dir[i] < 0.0f ? -1 : 0);
-    if (step[i] != 0) {
-      double border = grid.index_to_coord(ko[i]);
-      border += static_cast<float>(step[i] * res * 0.5);
-      t_max[i] = (border - static_cast<double>(o[i])) / static_cast<double>(dir[i]);
-      t_delta[i] = res / static_cast<double>(std::fabs(dir[i]));
-    } else {
-      t_max[i] = std::numeric_limits<double>::max();
-      t_delta[i] = std::numeric_limits<double>::max();
-    }
-  }
-
-  using I = typename Key::index_type;
-  for (;;) {
-    const int dim =
-        (t_max[0] < t_max[1]) ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
-    cur[dim] += step[dim];
-    t_max[dim] += t_delta[dim];
-    if (cur[0] == stop[0] && cur[1] == stop[1] && cur[2] == stop[2]) return true;
-    const double dist = std::min(std::min(t_max[0], t_max[1]), t_max[2]);
-    if (dist > static_cast<double>(length)) return true;
-    // OctoMap only asserts here; a walk that would leave the key range ends instead.
-    if (cur[dim] < 0 || cur[dim] >= Key::extent) return true;
-    visit(Key(static_cast<I>(cur[0]), static_cast<I>(cur[1]), static_cast<I>(cur[2])));
-  }
+  RayWalk<Key> w;
+  const RayStart start = start_ray(grid, origin, end, w);
+  if (start != RayStart::walk) return start == RayStart::same_voxel;
+  visit(static_cast<const Key&>(w.origin));
+  detail::KeyCursor<Key, Visit> cursor{{w.origin[0], w.origin[1], w.origin[2]},
+                                       {w.step[0], w.step[1], w.step[2]},
+                                       {w.end[0], w.end[1], w.end[2]},
+                                       visit};
+  walk_ray(w.state, cursor);
+  return true;
 }
 
 /// The keys of for_each_ray_key in a vector (cleared first). Returns false when out of range.

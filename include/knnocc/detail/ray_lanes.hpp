@@ -1,0 +1,370 @@
+#pragma once
+// Walking a stream of rays into a dense bit scratch: ScanInserter's hot loop.
+//
+// A LinearRay is walk_ray()'s state (raycast/dda.hpp) with a bit index in place of a key: a step
+// along axis a adds stride[a] (+-1, +-nx or +-nx*ny in a box of nx*ny*nz voxels), and the end
+// voxel is a bit index too. walk_linear_rays() sets the bit of every voxel each ray visits.
+//
+// The scalar walk spends most of its time on one branch: which axis steps next, a coin flip for
+// the CPU's predictor. On x86-64 CPUs with AVX2 (checked at run time) four rays walk at once, one
+// per 64-bit lane, with walk_ray()'s comparisons in branch-free form: the same comparisons on the
+// same doubles, so exactly the same voxels. A lane whose ray ends takes the next ray of the
+// stream; when the stream runs dry the remaining rays finish on the scalar walk. The set-up of
+// the rays (setup_walk) goes four at a time as well. Elsewhere (no AVX2, other architectures, or
+// KNNOCC_NO_SIMD defined) everything runs on the scalar code, with the same results.
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <limits>
+
+#include "../raycast/dda.hpp"
+
+#if !defined(KNNOCC_NO_SIMD) && (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__)
+#define KNNOCC_AVX2_LANES 1
+#include <immintrin.h>
+#else
+#define KNNOCC_AVX2_LANES 0
+#endif
+
+namespace knnocc::detail {
+
+/// One ray of a dense scratch, ready to walk from its current voxel `index`.
+struct LinearRay {
+  WalkState state;
+  std::int64_t index;      ///< bit of the voxel the walk stands on
+  std::int64_t stride[3];  ///< bit offset of one step along each axis (0: never steps)
+  std::int64_t end_index;  ///< bit of the end voxel
+};
+
+/// A ray of a scan, as ScanInserter collects it: its end point and end voxel (different from the
+/// origin's; the origin is the scan's).
+struct RayEnd {
+  Point3f end;
+  std::int32_t key[3];
+};
+
+/// What all rays of a scan share when they are set up as LinearRays: the origin, its voxel and
+/// borders, and the dense box (bit index = sum over axes of (key - lo) * stride).
+struct RayFan {
+  Point3f origin;
+  std::int32_t origin_key[3];
+  double resolution;
+  double border[3][2];  // [axis][step > 0]: setup_walk's border of the origin voxel
+  std::int64_t lo[3], stride[3];
+
+  template <class Key>
+  RayFan(const Grid<Key>& grid, const Point3f& o, const std::int32_t (&ko)[3],
+         const std::int64_t (&box_lo)[3], const std::int64_t (&box_stride)[3])
+      : origin(o), resolution(grid.resolution()) {
+    for (int a = 0; a < 3; ++a) {
+      origin_key[a] = ko[a];
+      lo[a] = box_lo[a];
+      stride[a] = box_stride[a];
+      for (const int step : {-1, 1}) {  // exactly setup_walk's two statements
+        double b = grid.index_to_coord(static_cast<typename Key::index_type>(ko[a]));
+        b += static_cast<float>(step * resolution * 0.5);
+        border[a][step > 0] = b;
+      }
+    }
+  }
+  std::int64_t index(const std::int32_t (&k)[3]) const {
+    return (k[0] - lo[0]) * stride[0] + (k[1] - lo[1]) * stride[1] + (k[2] - lo[2]) * stride[2];
+  }
+};
+
+/// One ray's set-up: setup_walk() (OctoMap's arithmetic) and the bit indices.
+template <class Key>
+void setup_linear_ray(const Grid<Key>& grid, const RayFan& fan, const RayEnd& ray, LinearRay& r) {
+  int step[3];
+  setup_walk(grid, fan.origin, ray.end, fan.origin_key, ray.key, step, r.state);
+  r.index = fan.index(fan.origin_key);
+  r.end_index = fan.index(ray.key);
+  for (int a = 0; a < 3; ++a) r.stride[a] = step[a] * fan.stride[a];
+}
+
+inline void set_bit(std::uint64_t* bits, std::int64_t i) {
+  bits[i >> 6] |= std::uint64_t{1} << (i & 63);
+}
+
+// walk_ray()'s cursor for bit indices.
+struct BitCursor {
+  std::int64_t index;
+  const std::int64_t* stride;
+  std::int64_t end_index;
+  std::uint64_t* bits;
+  std::size_t visits = 0;
+
+  template <int Axis>
+  void step() {
+    index += stride[Axis];
+  }
+  bool at_end() const { return index == end_index; }
+  bool visit() {
+    set_bit(bits, index);
+    ++visits;
+    return true;
+  }
+};
+
+/// Walks `r` on from its current voxel (whose bit is set already); returns the voxels visited.
+inline std::size_t finish_linear_ray(const LinearRay& r, std::uint64_t* bits) {
+  BitCursor cursor{r.index, r.stride, r.end_index, bits};
+  walk_ray(r.state, cursor);
+  return cursor.visits;
+}
+
+/// The one-ray-at-a-time walk. next(ray) fills the next ray and returns false when none is left.
+template <class Next>
+std::size_t walk_linear_rays_scalar(Next& next, std::uint64_t* bits) {
+  std::size_t visits = 0;
+  LinearRay r;
+  while (next(r)) {
+    set_bit(bits, r.index);  // the origin voxel
+    visits += 1 + finish_linear_ray(r, bits);
+  }
+  return visits;
+}
+
+#if KNNOCC_AVX2_LANES
+
+#define KNNOCC_TARGET_AVX2 __attribute__((target("avx2,bmi2")))
+
+inline bool cpu_has_avx2() {
+#if defined(__AVX2__) && defined(__BMI2__)
+  return true;
+#else
+  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi2");
+  return has;
+#endif
+}
+
+// setup_linear_ray() for four rays at once: setup_walk()'s float and double operations in the
+// same order (square root, divisions and conversions are correctly rounded in SIMD as in scalar
+// code), so the same bits; a test compares the two.
+template <class Key>
+KNNOCC_TARGET_AVX2 void setup_linear_rays4(const RayFan& fan, const RayEnd* rays, LinearRay* out) {
+  alignas(16) float e[3][4];
+  for (int k = 0; k < 4; ++k) {
+    e[0][k] = rays[k].end.x;
+    e[1][k] = rays[k].end.y;
+    e[2][k] = rays[k].end.z;
+  }
+  const float o[3] = {fan.origin.x, fan.origin.y, fan.origin.z};
+  __m128 dir[3];
+  for (int a = 0; a < 3; ++a) dir[a] = _mm_sub_ps(_mm_load_ps(e[a]), _mm_set1_ps(o[a]));
+  // octomap_norm: float squares summed left to right, square root in double, back to float.
+  const __m128 sq = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dir[0], dir[0]), _mm_mul_ps(dir[1], dir[1])),
+                               _mm_mul_ps(dir[2], dir[2]));
+  const __m128 length = _mm256_cvtpd_ps(_mm256_sqrt_pd(_mm256_cvtps_pd(sq)));
+  alignas(32) double t_max[3][4], t_delta[3][4], len[4];
+  alignas(16) float unit[3][4];
+  const __m256d zero = _mm256_setzero_pd(),
+                none = _mm256_set1_pd(std::numeric_limits<double>::max());
+  for (int a = 0; a < 3; ++a) {
+    const __m128 d = _mm_div_ps(dir[a], length);
+    _mm_store_ps(unit[a], d);
+    const __m256d dd = _mm256_cvtps_pd(d);
+    const __m256d up = _mm256_cmp_pd(dd, zero, _CMP_GT_OQ);
+    // Step 0 (t_max and t_delta stay at max) where the direction is neither > 0 nor < 0: zero,
+    // or NaN when the length underflowed (end points 1e-23 apart across a voxel border).
+    const __m256d still = _mm256_cmp_pd(dd, zero, _CMP_EQ_UQ);
+    const __m256d border =
+        _mm256_blendv_pd(_mm256_set1_pd(fan.border[a][0]), _mm256_set1_pd(fan.border[a][1]), up);
+    const __m256d tm =
+        _mm256_div_pd(_mm256_sub_pd(border, _mm256_set1_pd(static_cast<double>(o[a]))), dd);
+    const __m256d abs_d = _mm256_andnot_pd(_mm256_set1_pd(-0.0), dd);
+    const __m256d td = _mm256_div_pd(_mm256_set1_pd(fan.resolution), abs_d);
+    _mm256_store_pd(t_max[a], _mm256_blendv_pd(tm, none, still));
+    _mm256_store_pd(t_delta[a], _mm256_blendv_pd(td, none, still));
+  }
+  _mm256_store_pd(len, _mm256_cvtps_pd(length));
+  const std::int64_t origin_index = fan.index(fan.origin_key);
+  for (int k = 0; k < 4; ++k) {
+    LinearRay& r = out[k];
+    r.state.length = len[k];
+    r.state.steps_to_end = 0;
+    for (int a = 0; a < 3; ++a) {
+      r.state.t_max[a] = t_max[a][k];
+      r.state.t_delta[a] = t_delta[a][k];
+      r.state.steps_to_end +=
+          std::llabs(static_cast<std::int64_t>(rays[k].key[a]) - fan.origin_key[a]);
+      const int step = unit[a][k] > 0.0f ? 1 : (unit[a][k] < 0.0f ? -1 : 0);
+      r.stride[a] = step * fan.stride[a];
+    }
+    r.index = origin_index;
+    r.end_index = fan.index(rays[k].key);
+  }
+}
+
+// Four rays, one per 64-bit lane.
+struct RayLanes {
+  __m256d t0, t1, t2;  // next border crossing per axis
+  __m256d d0, d1, d2;  // between two borders per axis
+  __m256d length;
+  __m256i index, end;  // bit of the current and of the end voxel
+  __m256i s0, s1, s2;  // bit offset of a step per axis
+};
+
+// Puts r into lane l: broadcast and blend, so the other lanes stay in registers.
+KNNOCC_TARGET_AVX2 inline void put_lane(RayLanes& v, int l, const LinearRay& r) {
+  const __m256i mi = _mm256_cmpeq_epi64(_mm256_set1_epi64x(l), _mm256_set_epi64x(3, 2, 1, 0));
+  const __m256d m = _mm256_castsi256_pd(mi);
+  v.t0 = _mm256_blendv_pd(v.t0, _mm256_set1_pd(r.state.t_max[0]), m);
+  v.t1 = _mm256_blendv_pd(v.t1, _mm256_set1_pd(r.state.t_max[1]), m);
+  v.t2 = _mm256_blendv_pd(v.t2, _mm256_set1_pd(r.state.t_max[2]), m);
+  v.d0 = _mm256_blendv_pd(v.d0, _mm256_set1_pd(r.state.t_delta[0]), m);
+  v.d1 = _mm256_blendv_pd(v.d1, _mm256_set1_pd(r.state.t_delta[1]), m);
+  v.d2 = _mm256_blendv_pd(v.d2, _mm256_set1_pd(r.state.t_delta[2]), m);
+  v.length = _mm256_blendv_pd(v.length, _mm256_set1_pd(r.state.length), m);
+  v.index = _mm256_blendv_epi8(v.index, _mm256_set1_epi64x(r.index), mi);
+  v.end = _mm256_blendv_epi8(v.end, _mm256_set1_epi64x(r.end_index), mi);
+  v.s0 = _mm256_blendv_epi8(v.s0, _mm256_set1_epi64x(r.stride[0]), mi);
+  v.s1 = _mm256_blendv_epi8(v.s1, _mm256_set1_epi64x(r.stride[1]), mi);
+  v.s2 = _mm256_blendv_epi8(v.s2, _mm256_set1_epi64x(r.stride[2]), mi);
+}
+
+// The ray in lane l, with `steps_to_end` steps left before it can stand on its end voxel.
+KNNOCC_TARGET_AVX2 inline LinearRay get_lane(const RayLanes& v, int l, std::int64_t steps_to_end) {
+  alignas(32) double d[7][4];
+  alignas(32) std::int64_t i[5][4];
+  const __m256d dv[7] = {v.t0, v.t1, v.t2, v.d0, v.d1, v.d2, v.length};
+  const __m256i iv[5] = {v.index, v.end, v.s0, v.s1, v.s2};
+  for (int k = 0; k < 7; ++k) _mm256_store_pd(d[k], dv[k]);
+  for (int k = 0; k < 5; ++k) _mm256_store_si256(reinterpret_cast<__m256i*>(i[k]), iv[k]);
+  return LinearRay{
+      {{d[0][l], d[1][l], d[2][l]}, {d[3][l], d[4][l], d[5][l]}, d[6][l], steps_to_end},
+      i[0][l],
+      {i[2][l], i[3][l], i[4][l]},
+      i[1][l]};
+}
+
+// One step of walk_ray on the four lanes of v; returns the lanes that may have ended (bit l).
+KNNOCC_TARGET_AVX2 inline int step_lanes(RayLanes& v, __m256d& tmin) {
+  // walk_ray's step: x if t0 < t1 && t0 < t2, else y if t1 < t2 (and not x), else z.
+  const __m256d lt01 = _mm256_cmp_pd(v.t0, v.t1, _CMP_LT_OQ);
+  const __m256d lt02 = _mm256_cmp_pd(v.t0, v.t2, _CMP_LT_OQ);
+  const __m256d lt12 = _mm256_cmp_pd(v.t1, v.t2, _CMP_LT_OQ);
+  const __m256d x = _mm256_and_pd(lt01, lt02);
+  const __m256d y = _mm256_andnot_pd(lt01, lt12);
+  const __m256d z = _mm256_or_pd(lt02, lt12);  // inverted: z steps where this is 0
+  v.t0 = _mm256_add_pd(v.t0, _mm256_and_pd(x, v.d0));
+  v.t1 = _mm256_add_pd(v.t1, _mm256_and_pd(y, v.d1));
+  v.t2 = _mm256_add_pd(v.t2, _mm256_andnot_pd(z, v.d2));
+  const __m256i stride = _mm256_blendv_epi8(_mm256_blendv_epi8(v.s2, v.s1, _mm256_castpd_si256(y)),
+                                            v.s0, _mm256_castpd_si256(x));
+  v.index = _mm256_add_epi64(v.index, stride);
+  // A lane ends on its end voxel (the bit index is one-to-one, so one comparison does what
+  // walk_ray's countdown does) or once every next border lies beyond its length;
+  // std::min(std::min(t0, t1), t2), operand order included (vminpd(b, a) = b < a ? b : a).
+  tmin = _mm256_min_pd(v.t2, _mm256_min_pd(v.t1, v.t0));
+  const __m256d may_end = _mm256_or_pd(_mm256_cmp_pd(tmin, v.length, _CMP_GT_OQ),
+                                       _mm256_castsi256_pd(_mm256_cmpeq_epi64(v.index, v.end)));
+  return _mm256_movemask_pd(may_end);
+}
+
+KNNOCC_TARGET_AVX2 inline void mark_lanes(const RayLanes& v, std::uint64_t* bits) {
+  const __m128i lo = _mm256_castsi256_si128(v.index), hi = _mm256_extracti128_si256(v.index, 1);
+  set_bit(bits, _mm_cvtsi128_si64(lo));
+  set_bit(bits, _mm_extract_epi64(lo, 1));
+  set_bit(bits, _mm_cvtsi128_si64(hi));
+  set_bit(bits, _mm_extract_epi64(hi, 1));
+}
+
+/// Four rays at once (see the top of this file). AVX2 (and BMI2 shifts), never FMA: the
+/// arithmetic is walk_ray()'s, operation for operation. (Eight rays in two groups of four were
+/// measured too: slower, the loop is bound by its floating-point throughput, not its latency.)
+template <class Next>
+KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* bits) {
+  constexpr int kLanes = 4;
+  RayLanes v;
+  v.t0 = v.t1 = v.t2 = v.d0 = v.d1 = v.d2 = v.length = _mm256_setzero_pd();
+  v.index = v.end = v.s0 = v.s1 = v.s2 = _mm256_setzero_si256();
+  std::int64_t iteration = 0;  // steps taken by every lane
+  std::int64_t due[kLanes];    // value of `iteration` when a lane's step countdown runs out
+  std::int64_t end[kLanes];    // scalar copies for the rare path
+  double length[kLanes];
+  std::size_t visits = 0;
+  LinearRay r;
+  int loaded = 0;
+  for (; loaded < kLanes && next(r); ++loaded) {
+    set_bit(bits, r.index);  // the origin voxel
+    ++visits;
+    put_lane(v, loaded, r);
+    due[loaded] = r.state.steps_to_end;
+    end[loaded] = r.end_index;
+    length[loaded] = r.state.length;
+  }
+  if (loaded < kLanes) {  // too few rays: the scalar walk
+    for (int l = 0; l < loaded; ++l) visits += finish_linear_ray(get_lane(v, l, due[l]), bits);
+    return visits;
+  }
+
+  for (;;) {
+    __m256d tmin;
+    int ended;
+    while (!(ended = step_lanes(v, tmin))) {
+      ++iteration;
+      mark_lanes(v, bits);
+      visits += kLanes;
+    }
+    ++iteration;
+
+    // Rare path: settle the lanes that may have ended, refill finished ones from the stream.
+    alignas(32) double tm[kLanes];
+    alignas(32) std::int64_t idx[kLanes];
+    _mm256_store_pd(tm, tmin);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(idx), v.index);
+    bool live[kLanes] = {true, true, true, true}, dry = false;
+    for (int l = 0; l < kLanes; ++l) {
+      const bool done = ((ended >> l) & 1) && (idx[l] == end[l] || tm[l] > length[l]);
+      if (!done) {
+        set_bit(bits, idx[l]);
+        ++visits;
+      } else if (!dry && next(r)) {
+        set_bit(bits, r.index);
+        ++visits;
+        put_lane(v, l, r);
+        due[l] = iteration + r.state.steps_to_end;
+        end[l] = r.end_index;
+        length[l] = r.state.length;
+      } else {
+        dry = true;
+        live[l] = false;
+      }
+    }
+    if (dry) {  // the stream ran dry: the rays still walking finish one at a time
+      for (int l = 0; l < kLanes; ++l)
+        if (live[l]) visits += finish_linear_ray(get_lane(v, l, due[l] - iteration), bits);
+      return visits;
+    }
+  }
+}
+
+#undef KNNOCC_TARGET_AVX2
+
+#endif  // KNNOCC_AVX2_LANES
+
+/// Walks every ray next() yields, setting the bit of each voxel visited (origin included, end
+/// excluded, exactly walk_ray()'s voxels). Returns the number of voxels visited.
+template <class Next>
+std::size_t walk_linear_rays(Next& next, std::uint64_t* bits) {
+#if KNNOCC_AVX2_LANES
+  if (cpu_has_avx2()) return walk_linear_rays_avx2(next, bits);
+#endif
+  return walk_linear_rays_scalar(next, bits);
+}
+
+/// setup_linear_ray() for rays[0..n), four at a time on AVX2 machines.
+template <class Key>
+void setup_linear_rays(const Grid<Key>& grid, const RayFan& fan, const RayEnd* rays, std::size_t n,
+                       LinearRay* out) {
+  std::size_t i = 0;
+#if KNNOCC_AVX2_LANES
+  if (cpu_has_avx2())
+    for (; i + 4 <= n; i += 4) setup_linear_rays4<Key>(fan, rays + i, out + i);
+#endif
+  for (; i < n; ++i) setup_linear_ray(grid, fan, rays[i], out[i]);
+}
+
+}  // namespace knnocc::detail

@@ -1,0 +1,101 @@
+#pragma once
+// ScanBitmap: one bit per voxel of a brick-aligned box of keys, the per-scan scratch of
+// ScanInserter when a scan's box is small enough (see ScanInserter::dense_fits).
+//
+// Bit ((z - lo_z) * ny + (y - lo_y)) * nx + (x - lo_x), x fastest, so a step along an axis is a
+// constant offset (what the ray walk needs) and the 8 bits of a brick row (fixed y and z) are one
+// byte of a 64-bit word: a brick's VoxelMask is its 64 row bytes, gathered by take_brick_row().
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <new>
+
+#include "../core/config.hpp"
+#include "../map/brick.hpp"
+
+namespace knnocc::detail {
+
+class ScanBitmap {
+ public:
+  /// Makes this the all-zero bitmap of the box [lo, lo + size) (lo a multiple of 8, size a
+  /// multiple of 64 along x and of 8 along y and z).
+  /// Keeps the memory; bits are zero already when every brick row was taken since the last use.
+  void reshape(const std::int64_t (&lo)[3], const std::int64_t (&size)[3]) {
+    for (int a = 0; a < 3; ++a) {
+      lo_[a] = lo[a];
+      n_[a] = size[a];
+    }
+    const auto words = static_cast<std::size_t>(n_[0] / 64 * n_[1] * n_[2]);
+    if (dirty_) std::fill(bits_.get(), bits_.get() + capacity_, std::uint64_t{0});
+    if (capacity_ < words) {
+      // calloc, not a zero-filled vector: large blocks come straight from the kernel as zero
+      // pages, so pages no ray touches cost nothing (a fresh page costs ~2 us here).
+      bits_.reset(static_cast<std::uint64_t*>(std::calloc(words, sizeof(std::uint64_t))));
+      capacity_ = bits_ ? words : 0;
+      if (!bits_) out_of_memory();
+    }
+    dirty_ = true;  // until take_brick_row has seen every row
+  }
+
+  std::int64_t index(std::int64_t x, std::int64_t y, std::int64_t z) const {
+    return ((z - lo_[2]) * n_[1] + (y - lo_[1])) * n_[0] + (x - lo_[0]);
+  }
+  /// Bit offset of one voxel along axis a.
+  std::int64_t stride(int a) const { return a == 0 ? 1 : a == 1 ? n_[0] : n_[0] * n_[1]; }
+  /// Bit i is bit (i & 63) of word i >> 6.
+  std::uint64_t* words() { return bits_.get(); }
+
+  const std::int64_t* lo() const { return lo_; }
+  /// Number of bricks along axis a.
+  std::int64_t bricks(int a) const { return n_[a] / kBrickEdge; }
+
+  /// ORs the bits of the bricks (0..bricks(0)-1, by, bz) into masks[0..bricks(0)) and clears them.
+  void take_brick_row(std::int64_t by, std::int64_t bz, VoxelMask* masks) {
+    const std::int64_t row_words = n_[0] / 64;
+    for (int lz = 0; lz < kBrickEdge; ++lz) {
+      // The 8 rows (ly = 0..7) of this z slice are contiguous: skip them at once when empty.
+      std::uint64_t* slice =
+          bits_.get() + ((bz * kBrickEdge + lz) * n_[1] + by * kBrickEdge) * row_words;
+      std::uint64_t any = 0;
+      for (std::int64_t i = 0; i < kBrickEdge * row_words; ++i) any |= slice[i];
+      if (!any) continue;
+      for (int ly = 0; ly < kBrickEdge; ++ly) {
+        std::uint64_t* row = slice + ly * row_words;
+        for (std::int64_t wx = 0; wx < row_words; ++wx) {
+          const std::uint64_t w = row[wx];  // eight bricks along x, 8 bits each
+          if (!w) continue;
+          row[wx] = 0;
+          for (int b = 0; b < 8; ++b) {
+            // Row (ly, lz) of a brick is bits 8 ly .. 8 ly + 7 of VoxelMask word lz.
+            const std::uint64_t byte = (w >> (8 * b)) & 0xff;
+            masks[wx * 8 + b].w[static_cast<std::size_t>(lz)] |= byte << (8 * ly);
+          }
+        }
+      }
+    }
+  }
+  /// Call after taking every brick row: the bitmap is all zero again.
+  void mark_clean() { dirty_ = false; }
+
+ private:
+  struct Free {
+    void operator()(std::uint64_t* p) const { std::free(p); }
+  };
+  [[noreturn]] static void out_of_memory() {
+#if KNNOCC_HAS_EXCEPTIONS
+    throw std::bad_alloc();
+#else
+    std::abort();
+#endif
+  }
+
+  std::unique_ptr<std::uint64_t[], Free> bits_;
+  std::size_t capacity_ = 0;  // words
+  std::int64_t lo_[3] = {0, 0, 0};
+  std::int64_t n_[3] = {0, 0, 0};
+  bool dirty_ = false;
+};
+
+}  // namespace knnocc::detail

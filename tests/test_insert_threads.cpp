@@ -1,0 +1,315 @@
+// Multithreaded insertion and the two scratch paths give the very same map: same voxels, same
+// log-odds, same storage order, same statistics, for 1, 2, 4 and 8 threads. The 4-rays-at-once
+// walk sets exactly the voxels of the scalar walk and of compute_ray_keys.
+// (The insert_threads.* cases also run under ThreadSanitizer: ctest -R tsan.)
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <knnocc/detail/ray_lanes.hpp>
+#include <knnocc/io/xyz.hpp>
+#include <knnocc/map/scan_inserter.hpp>
+
+#include "test_support.hpp"
+
+using knnocc::OccupancyMap;
+using knnocc::OcKey;
+using knnocc::Point3f;
+using knnocc::WideKey;
+
+namespace {
+
+struct Scan {
+  Point3f origin;
+  std::vector<Point3f> points;
+};
+
+// A room-like scene: most points on walls and a floor, some inside, a few far away or invalid.
+std::vector<Scan> random_scans(std::uint64_t seed, int scans, int points) {
+  knnocc::test::Rng rng(seed);
+  std::uniform_real_distribution<float> u(-6.f, 6.f), o(-0.5f, 0.5f), unit(0.f, 1.f);
+  std::vector<Scan> out(static_cast<std::size_t>(scans));
+  for (auto& s : out) {
+    s.origin = {o(rng), o(rng), 1.0f + o(rng)};
+    for (int i = 0; i < points; ++i) {
+      Point3f p{u(rng), u(rng), u(rng) * 0.4f};
+      const float r = unit(rng);
+      if (r < 0.3f)
+        p.z = 0.0f;  // floor
+      else if (r < 0.6f)
+        p.x = p.x < 0 ? -6.f : 6.f;  // walls
+      else if (r < 0.602f)
+        p.x *= 4.0f;  // far
+      else if (r < 0.603f)
+        p.y = std::nanf("");  // invalid
+      s.points.push_back(p);
+    }
+  }
+  return out;
+}
+
+template <class Key>
+struct Outcome {
+  std::vector<std::tuple<std::uint64_t, float>> voxels;  // in storage order
+  std::vector<std::size_t> stats;                        // per scan: keys, occupied, free, ...
+
+  bool operator==(const Outcome& o) const { return voxels == o.voxels && stats == o.stats; }
+};
+
+template <class Key>
+Outcome<Key> insert(const std::vector<Scan>& scans, double res, unsigned threads,
+                    std::size_t scratch_limit, double max_range = -1.0, bool discretize = false) {
+  OccupancyMap<Key> map(res);
+  knnocc::ScanInserter<Key> inserter(map, {}, threads);
+  inserter.set_scratch_limit(scratch_limit);
+  Outcome<Key> out;
+  for (const auto& s : scans) {
+    const auto st = inserter.insert_point_cloud(s.origin, s.points, max_range, discretize);
+    out.stats.insert(out.stats.end(),
+                     {st.points, st.nonfinite, st.out_of_range, st.beyond_max_range, st.ray_keys,
+                      st.occupied_voxels, st.free_voxels});
+  }
+  map.for_each_voxel([&](const Key& k, float v) { out.voxels.emplace_back(k.pack(), v); });
+  return out;
+}
+
+constexpr std::size_t kDefaultLimit = std::size_t{128} << 20;
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("insert_threads.identical_maps", Key, OcKey, WideKey) {
+  // 12,000 points per scan: collect() splits the points between the threads too (from 8,192).
+  const auto scans = random_scans(7, 3, 12000);
+  for (const double max_range : {-1.0, 3.0}) {
+    for (const bool discretize : {false, true}) {
+      CAPTURE(max_range);
+      CAPTURE(discretize);
+      const auto one = insert<Key>(scans, 0.1, 1, kDefaultLimit, max_range, discretize);
+      REQUIRE(one.voxels.size() > 10000);
+      for (const unsigned threads : {2u, 4u, 8u}) {
+        CAPTURE(threads);
+        CHECK(insert<Key>(scans, 0.1, threads, kDefaultLimit, max_range, discretize) == one);
+        // The hashed scratch (what a scan too large for the dense one takes) agrees too.
+        CHECK(insert<Key>(scans, 0.1, threads, 0, max_range, discretize) == one);
+      }
+      CHECK(insert<Key>(scans, 0.1, 1, 0, max_range, discretize) == one);
+    }
+  }
+}
+
+TEST_CASE("insert_threads.scratch_limit_picks_the_path_not_the_map") {
+  // Scans whose box is too large for the dense scratch under a given limit fall back to the
+  // hashed one; in between, some scans of a sequence take one path and some the other.
+  const auto scans = random_scans(11, 6, 3000);
+  const auto reference = insert<OcKey>(scans, 0.05, 1, kDefaultLimit);
+  for (const std::size_t limit :
+       {std::size_t{0}, std::size_t{5} << 20, std::size_t{8} << 20, std::size_t{16} << 20}) {
+    CAPTURE(limit);
+    CHECK(insert<OcKey>(scans, 0.05, 1, limit) == reference);
+    CHECK(insert<OcKey>(scans, 0.05, 3, limit) == reference);
+  }
+}
+
+TEST_CASE("insert_threads.scan_dat") {
+  const std::string path = knnocc::test::scan_dat_path();
+  if (path.empty()) {
+    MESSAGE("skipped: scan.dat not available (needs ../shared/data and the ctest fixture)");
+    return;
+  }
+  std::vector<Scan> scans(1);
+  scans[0].points = knnocc::io::read_xyz(path).points;
+  const auto one = insert<OcKey>(scans, 0.1, 1, kDefaultLimit);
+  CHECK(one.stats[4] == 7066778);  // ray keys, as liboctomap's computeRayKeys
+  for (const unsigned threads : {2u, 4u, 8u}) {
+    CAPTURE(threads);
+    CHECK(insert<OcKey>(scans, 0.1, threads, kDefaultLimit) == one);
+  }
+  CHECK(insert<OcKey>(scans, 0.1, 2, 0) == one);
+}
+
+TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
+  // Rays of every kind through one box: random, axis-aligned, planar, exact diagonals through
+  // voxel corners (ties), one-voxel and zero-length ones, negative coordinates. The walk that
+  // insert_point_cloud uses (four rays at once on AVX2 machines) against the one-ray walk and
+  // against compute_ray_keys, bit for bit and visit for visit.
+  knnocc::test::Rng rng(5);
+  for (const double res : {0.1, 0.5, 0.07}) {
+    CAPTURE(res);
+    const knnocc::Grid<OcKey> grid(res);
+    std::uniform_real_distribution<float> u(-3.f, 3.f);
+    std::uniform_int_distribution<int> kind(0, 9), cell(-6, 6);
+    std::vector<std::pair<Point3f, Point3f>> rays;
+    for (int i = 0; i < 4000; ++i) {
+      Point3f o{u(rng), u(rng), u(rng)}, e{u(rng), u(rng), u(rng)};
+      switch (kind(rng)) {
+        case 0:
+          e.y = o.y, e.z = o.z;
+          break;  // along x
+        case 1:
+          e.z = o.z;
+          break;   // in a plane
+        case 2: {  // through voxel corners
+          const float c = static_cast<float>(res) * 0.5f;
+          o = {c * cell(rng), c * cell(rng), c * cell(rng)};
+          const float d = static_cast<float>(res) * static_cast<float>(cell(rng));
+          e = {o.x + d, o.y + d, o.z - d};
+          break;
+        }
+        case 3:
+          e = {o.x + 0.01f, o.y, o.z};
+          break;  // tiny
+        case 4:
+          e = o;
+          break;  // zero length
+        default:
+          break;
+      }
+      rays.emplace_back(o, e);
+    }
+    // The box: every key the rays touch, grown by one voxel (as ScanInserter's dense box).
+    std::int64_t lo[3] = {1 << 20, 1 << 20, 1 << 20}, hi[3] = {-1, -1, -1};
+    std::vector<std::vector<OcKey>> keys;
+    for (const auto& [o, e] : rays) {
+      keys.emplace_back();
+      knnocc::compute_ray_keys(grid, o, e, keys.back());
+      OcKey k;
+      for (const Point3f& p : {o, e}) {
+        REQUIRE(grid.point_to_key(p, k));
+        for (int a = 0; a < 3; ++a) {
+          lo[a] = std::min<std::int64_t>(lo[a], k[a] - 1);
+          hi[a] = std::max<std::int64_t>(hi[a], k[a] + 1);
+        }
+      }
+    }
+    knnocc::detail::ScanBitmap box;
+    std::int64_t base[3], size[3];
+    for (int a = 0; a < 3; ++a) {
+      base[a] = lo[a] / 8 * 8;
+      size[a] = ((hi[a] + 1 - base[a]) + 63) / 64 * 64;
+    }
+    box.reshape(base, size);
+    const std::size_t words = static_cast<std::size_t>((size[0] * size[1] * size[2] + 63) / 64);
+    // Chunks of 7 rays: four lanes, refills and the scalar drain all happen in every chunk, and
+    // a voxel missed by one ray is rarely hidden by another ray of the same chunk.
+    std::size_t walked = 0;
+    for (std::size_t first = 0; first < rays.size(); first += 7) {
+      std::vector<knnocc::detail::LinearRay> linear;
+      std::vector<std::uint64_t> expected(words, 0);
+      std::size_t expected_visits = 0;
+      for (std::size_t i = first; i < std::min(rays.size(), first + 7); ++i) {
+        knnocc::RayWalk<OcKey> w;
+        if (knnocc::start_ray(grid, rays[i].first, rays[i].second, w) != knnocc::RayStart::walk) {
+          CHECK(keys[i].empty());
+          continue;
+        }
+        knnocc::detail::LinearRay r;
+        r.state = w.state;
+        r.index = box.index(w.origin[0], w.origin[1], w.origin[2]);
+        r.end_index = box.index(w.end[0], w.end[1], w.end[2]);
+        for (int a = 0; a < 3; ++a) r.stride[a] = w.step[a] * box.stride(a);
+        linear.push_back(r);
+        expected_visits += keys[i].size();
+        for (const OcKey& k : keys[i])
+          knnocc::detail::set_bit(expected.data(), box.index(k[0], k[1], k[2]));
+      }
+      auto walk = [&](bool lanes) {
+        std::vector<std::uint64_t> bits(words, 0);
+        std::size_t next = 0;
+        auto source = [&](knnocc::detail::LinearRay& r) {
+          if (next == linear.size()) return false;
+          r = linear[next++];
+          return true;
+        };
+        const std::size_t visits =
+            lanes ? knnocc::detail::walk_linear_rays(source, bits.data())
+                  : knnocc::detail::walk_linear_rays_scalar(source, bits.data());
+        return std::make_pair(visits, bits);
+      };
+      const auto scalar = walk(false), fast = walk(true);
+      CHECK(scalar.first == expected_visits);
+      CHECK(fast.first == expected_visits);
+      CHECK(scalar.second == expected);
+      CHECK(fast.second == expected);
+      walked += expected_visits;
+    }
+    MESSAGE(walked << " voxels walked at resolution " << res);
+  }
+#if KNNOCC_AVX2_LANES
+  const std::string lanes = knnocc::detail::cpu_has_avx2() ? "used" : "not supported by this CPU";
+  MESSAGE("four-lane AVX2 walk: " << lanes);
+#endif
+}
+
+TEST_CASE("insert_threads.four_ray_setup_matches_setup_walk") {
+  // setup_linear_rays (four rays at a time with AVX2) against setup_linear_ray (setup_walk),
+  // field by field and bit for bit, on rays in every direction, along axes and in planes.
+  knnocc::test::Rng rng(8);
+  std::uniform_real_distribution<float> u(-30.f, 30.f);
+  for (const double res : {0.1, 0.05, 0.37}) {
+    const knnocc::Grid<OcKey> grid(res);
+    const Point3f origin{u(rng) * 0.1f, u(rng) * 0.1f, u(rng) * 0.1f};
+    OcKey ko;
+    REQUIRE(grid.point_to_key(origin, ko));
+    const std::int32_t okey[3] = {ko[0], ko[1], ko[2]};
+    const std::int64_t lo[3] = {ko[0] - 1000, ko[1] - 1000, ko[2] - 1000};
+    const std::int64_t stride[3] = {1, 4096, 4096 * 4096};
+    const knnocc::detail::RayFan fan(grid, origin, okey, lo, stride);
+    std::vector<knnocc::detail::RayEnd> rays;
+    for (int i = 0; i < 4003; ++i) {
+      Point3f e{u(rng), u(rng), u(rng)};
+      if (i % 7 == 1) e.x = origin.x;
+      if (i % 11 == 2) e.y = origin.y, e.z = origin.z;
+      OcKey ke;
+      REQUIRE(grid.point_to_key(e, ke));
+      if (ke == ko) continue;
+      rays.push_back({e, {ke[0], ke[1], ke[2]}});
+    }
+    std::vector<knnocc::detail::LinearRay> fast(rays.size()), slow(rays.size());
+    knnocc::detail::setup_linear_rays(grid, fan, rays.data(), rays.size(), fast.data());
+    for (std::size_t i = 0; i < rays.size(); ++i)
+      knnocc::detail::setup_linear_ray(grid, fan, rays[i], slow[i]);
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const auto& a = fast[i];
+      const auto& b = slow[i];
+      bool same = a.index == b.index && a.end_index == b.end_index &&
+                  a.state.length == b.state.length && a.state.steps_to_end == b.state.steps_to_end;
+      for (int k = 0; k < 3; ++k)
+        same = same && a.stride[k] == b.stride[k] && a.state.t_max[k] == b.state.t_max[k] &&
+               a.state.t_delta[k] == b.state.t_delta[k];
+      differing += !same;
+    }
+    CHECK(differing == 0);
+  }
+  // A degenerate ray: the end points straddle the border at 0 by 1e-30 m, so the squared length
+  // underflows to 0 and the direction is inf / NaN (OctoMap's arithmetic, repeated exactly).
+  const knnocc::Grid<OcKey> grid(0.1);
+  const Point3f o{-1e-30f, 0.01f, 0.01f}, e{1e-30f, 0.01f, 0.01f};
+  OcKey ko, ke;
+  REQUIRE(grid.point_to_key(o, ko));
+  REQUIRE(grid.point_to_key(e, ke));
+  REQUIRE(ko != ke);
+  const std::int32_t okey[3] = {ko[0], ko[1], ko[2]};
+  const std::int64_t lo[3] = {ko[0] - 8, ko[1] - 8, ko[2] - 8};
+  const std::int64_t stride[3] = {1, 64, 64 * 64};
+  const knnocc::detail::RayFan fan(grid, o, okey, lo, stride);
+  const knnocc::detail::RayEnd ray{e, {ke[0], ke[1], ke[2]}};
+  const std::vector<knnocc::detail::RayEnd> rays(4, ray);
+  std::vector<knnocc::detail::LinearRay> fast(4);
+  knnocc::detail::setup_linear_rays(grid, fan, rays.data(), 4, fast.data());
+  knnocc::detail::LinearRay slow;
+  knnocc::detail::setup_linear_ray(grid, fan, ray, slow);
+  for (int a = 0; a < 3; ++a) {
+    CHECK(fast[3].stride[a] == slow.stride[a]);
+    CHECK(std::memcmp(&fast[3].state.t_max[a], &slow.state.t_max[a], sizeof(double)) == 0);
+    CHECK(std::memcmp(&fast[3].state.t_delta[a], &slow.state.t_delta[a], sizeof(double)) == 0);
+  }
+  std::vector<OcKey> keys;
+  REQUIRE(knnocc::compute_ray_keys(grid, o, e, keys));
+  CHECK(keys.size() == 1);  // the origin voxel; the next step lands on the end voxel
+}

@@ -191,6 +191,13 @@ TEST_CASE("map.change_detection_follows_octomap") {
   CHECK(got == std::map<OcKey, bool>{{b, false}});
   map.update(b, 3.0f);  // flips back: record removed
   CHECK(map.num_changed_keys() == 0);
+  const OcKey c(12, 10, 10);
+  map.update(c, 0.85f);  // new: recorded as created
+  map.update(c, -2.0f);  // then flips: the created record stays, as in OctoMap
+  std::map<OcKey, bool> after_flip;
+  map.for_each_changed_key([&](const OcKey& k, bool created) { after_flip[k] = created; });
+  CHECK(after_flip == std::map<OcKey, bool>{{c, true}});
+  map.reset_change_detection();
   map.enable_change_detection(false);
   map.update(OcKey(1, 2, 3), 1.0f);
   CHECK(map.num_changed_keys() == 0);

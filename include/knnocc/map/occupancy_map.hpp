@@ -407,7 +407,7 @@ class OccupancyMap {
     auto it = changed_.find(packed);
     if (it == changed_.end())
       changed_.emplace(packed, false);
-    else
+    else if (!it->second)  // a voxel recorded as new stays recorded (OctoMap does the same)
       changed_.erase(it);
   }
 

@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "bench_common.hpp"
+
 #include <knnocc/map/scan_inserter.hpp>
 #include <knnocc/version.hpp>
 
@@ -31,9 +33,7 @@ using knnocc::Point3f;
 
 namespace {
 
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+using knnocc::bench::now;
 
 struct Box {
   double lo[3], hi[3];

@@ -21,6 +21,8 @@
 #include <string>
 #include <vector>
 
+#include "bench_common.hpp"
+
 #include <knnocc/io/ply.hpp>
 #include <knnocc/io/xyz.hpp>
 #include <knnocc/version.hpp>
@@ -33,23 +35,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-// scan.dat ships bz2-compressed; decompress once into build/data (as the test fixture does).
-std::string scan_dat(const fs::path& data) {
-  const fs::path bz2 = data / "octomap_fr079" / "scan.dat.bz2";
-  const fs::path out = fs::path("build") / "data" / "scan.dat";
-  if (fs::exists(out)) return out.string();
-  if (!fs::exists(bz2)) return {};
-  fs::create_directories(out.parent_path());
-  const std::string tmp = out.string() + ".tmp";
-  const std::string cmd = "bzip2 -dc '" + bz2.string() + "' > '" + tmp + "'";
-  if (std::system(cmd.c_str()) != 0) return {};
-  fs::rename(tmp, out);
-  return out.string();
-}
+using knnocc::bench::now;
+using knnocc::bench::scan_dat;
 
 struct Child {
   double seconds = 0;

@@ -22,15 +22,15 @@
 #include <unordered_map>
 #include <vector>
 
+#include "bench_common.hpp"
+
 #include <knnocc/io/sequence.hpp>
 #include <knnocc/knn/tracker.hpp>
 #include <knnocc/version.hpp>
 
 namespace {
 
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+using knnocc::bench::now;
 
 double peak_rss_mb() {
   struct rusage ru {};

@@ -16,13 +16,21 @@ namespace {
 std::atomic<std::size_t> g_allocations{0};
 }
 
-void* operator new(std::size_t n) {
+// Not inlined: GCC 12 would otherwise pair the inlined malloc of one with the free of the other
+// (-Wmismatched-new-delete) wherever a container's new and delete meet in one function.
+#if defined(__GNUC__)
+#define KNNOCC_TEST_NOINLINE __attribute__((noinline))
+#else
+#define KNNOCC_TEST_NOINLINE
+#endif
+
+KNNOCC_TEST_NOINLINE void* operator new(std::size_t n) {
   ++g_allocations;
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+KNNOCC_TEST_NOINLINE void operator delete(void* p) noexcept { std::free(p); }
+KNNOCC_TEST_NOINLINE void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 TEST_CASE("insert.no_allocation_once_warmed_up") {
   knnocc::test::Rng rng(17);

@@ -89,7 +89,10 @@ inline ChangeSet diff_by_id(const std::unordered_map<std::uint64_t, Point3d>& pr
 class KeyframeUnion {
  public:
   /// world: one keyframe's points in the world frame; ids: one per point, or empty.
-  ChangeSet add(const std::vector<Point3d>& world, const std::vector<std::uint64_t>& ids) {
+  /// map_ids (optional): gets each point's map-point id (its own id, or the one given out), or
+  /// kNoId for a point skipped as non-finite.
+  ChangeSet add(const std::vector<Point3d>& world, const std::vector<std::uint64_t>& ids,
+                std::vector<std::uint64_t>* map_ids = nullptr) {
     if (!world.empty()) {
       if (with_ids_ == kUnknown) with_ids_ = ids.empty() ? kNo : kYes;
       if ((with_ids_ == kYes) == ids.empty())
@@ -98,17 +101,19 @@ class KeyframeUnion {
         detail::invalid_argument("KeyframeUnion: one id per point expected");
     }
     ChangeSet cs;
+    if (map_ids) map_ids->assign(world.size(), kNoId);
     for (std::size_t j = 0; j < world.size(); ++j) {
       if (!is_finite(world[j])) {
         ++skipped_nonfinite_;
-      } else if (ids.empty()) {
-        cs.added.push_back({next_id_++, world[j]});
-      } else if (seen_.insert(ids[j]).second) {
-        cs.added.push_back({ids[j], world[j]});
+        continue;
       }
+      const std::uint64_t id = ids.empty() ? next_id_++ : ids[j];
+      if (map_ids) (*map_ids)[j] = id;
+      if (ids.empty() || seen_.insert(id).second) cs.added.push_back({id, world[j]});
     }
     return cs;
   }
+  static constexpr std::uint64_t kNoId = ~std::uint64_t{0};
   std::size_t skipped_nonfinite() const { return skipped_nonfinite_; }
 
  private:

@@ -27,6 +27,11 @@
 //      thread), then every touched voxel updated exactly once, occupied first (each brick by one
 //      thread).
 // The scratch is kept between scans, so a warmed-up inserter allocates nothing per scan.
+//
+// insert_rated() is the same scan with a per-endpoint sensor model (KnnModel, eq 13-15): each
+// endpoint brings its own occupied log-odds and its own "casts a free ray" decision; a voxel
+// holding endpoints receives the sum of their log-odds (eq 15) and no free update (occupied wins),
+// free voxels receive the model's miss_logodds() once per scan.
 
 #include <algorithm>
 #include <array>
@@ -49,6 +54,7 @@
 #include "../detail/scan_bitmap.hpp"
 #include "../detail/thread_pool.hpp"
 #include "../raycast/dda.hpp"
+#include "../sensor/endpoint_rating.hpp"
 #include "../sensor/octomap_model.hpp"
 #include "occupancy_map.hpp"
 
@@ -76,7 +82,7 @@ struct ScanStats {
   std::size_t out_of_range = 0;      ///< endpoints outside the key range (no update from them)
   std::size_t beyond_max_range = 0;  ///< points farther than max_range (truncated free ray only)
   std::size_t ray_keys = 0;          ///< voxels visited by rays, before de-duplication
-  std::size_t occupied_voxels = 0;   ///< voxels that received the hit update
+  std::size_t occupied_voxels = 0;   ///< voxels that received the hit update (or a rated sum)
   std::size_t free_voxels = 0;       ///< voxels that received the miss update
   bool origin_valid = true;          ///< false: origin NaN/Inf, nothing was inserted
 };
@@ -129,12 +135,38 @@ class ScanInserter {
       for (const auto& p : points) (void)p, ++st.points;
       return st;
     }
-    collect(points, max_range, discretize, st);
-    if (hits_total_ == 0 && rays_total_ == 0) return st;
-    if (dense_fits())
-      walk_dense(st);
-    else
-      walk_hashed(st);
+    rated_ = false;
+    hit_l_ = model_.hit_logodds();
+    miss_l_ = model_.miss_logodds();
+    collect(points, max_range, discretize, nullptr, st);
+    walk(st);
+    return st;
+  }
+
+  /// Eq 15 scan: ratings[i] rates points[i] (same length, else std::invalid_argument). A point
+  /// within max_range adds ratings[i].logodds to its voxel's sum; any point casts its ray (for a
+  /// point beyond max_range the ray truncated at max_range) only if ratings[i].casts_ray. Voxels
+  /// holding endpoints get their sum, rounded to float once (summed in double in point order);
+  /// voxels crossed by rays and holding no endpoint get model().miss_logodds(). Non-finite and
+  /// out-of-range points are skipped and counted as in insert_point_cloud.
+  template <class Points, class Origin>
+  ScanStats insert_rated(const Origin& origin, const Points& points,
+                         const std::vector<EndpointRating>& ratings, double max_range = -1.0) {
+    if (max_range == 0.0 || std::isnan(max_range))
+      detail::invalid_argument("max_range must be > 0, or < 0 for no limit");
+    const auto n = static_cast<std::size_t>(std::distance(std::begin(points), std::end(points)));
+    if (n != ratings.size()) detail::invalid_argument("insert_rated: one rating per point expected");
+    ScanStats st;
+    origin_ = to_point3f(origin);
+    if (!detail::finite(origin_)) {
+      st.origin_valid = false;
+      st.points = n;
+      return st;
+    }
+    rated_ = true;
+    miss_l_ = model_.miss_logodds();
+    collect(points, max_range, false, ratings.data(), st);
+    walk(st);
     return st;
   }
 
@@ -157,6 +189,7 @@ class ScanInserter {
   struct Part {
     std::vector<Ray> rays;                // the rays that visit at least one voxel
     std::vector<std::uint64_t> hits;      // occupied endpoint keys, packed
+    std::vector<float> hit_logodds;       // insert_rated: the log-odds of each hit
     std::int64_t key_min[3], key_max[3];  // key box of origin, ray ends and hits
     std::size_t steps = 0;                // sum of |end - origin|_1 over the rays
     ScanStats st;                         // points, nonfinite, out_of_range, beyond_max_range
@@ -164,6 +197,7 @@ class ScanInserter {
     void clear() {
       rays.clear();
       hits.clear();
+      hit_logodds.clear();
       steps = 0;
       st = ScanStats{};
     }
@@ -220,20 +254,26 @@ class ScanInserter {
     const detail::KeyRounding<Key> rounding;
     Part& part;
 
+    // rating: null, or the rating of *first (one per point from there on).
     template <class It>
-    void add_points(It first, It last) {
+    void add_points(It first, It last, const EndpointRating* rating) {
       for (; first != last; ++first) {
         ++part.st.points;
         const Point3f q = to_point3f(*first);
+        const EndpointRating* r = rating ? rating++ : nullptr;
         if (!detail::finite(q)) {
           ++part.st.nonfinite;
           continue;
         }
-        add(q);
+        if (r)
+          add<true>(q, r);
+        else
+          add<false>(q, nullptr);
       }
     }
 
-    KNNOCC_ALWAYS_INLINE void add(const Point3f& p) {
+    template <bool Rated = false>
+    KNNOCC_ALWAYS_INLINE void add(const Point3f& p, const EndpointRating* r = nullptr) {
       const Point3f& o = origin;
       std::int64_t k[3];
       if (max_range < 0.0 || detail::octomap_norm(p.x - o.x, p.y - o.y, p.z - o.z) <= max_range) {
@@ -243,9 +283,15 @@ class ScanInserter {
         }
         part.hits.push_back(pack(k));  // even when the origin is out of range, as OctoMap
         extend_box(k);
+        if constexpr (Rated) {
+          part.hit_logodds.push_back(r->logodds);
+          if (!r->casts_ray) return;
+        }
         add_ray<false>(p, k);  // the box holds k already
       } else {
         ++part.st.beyond_max_range;
+        if constexpr (Rated)
+          if (!r->casts_ray) return;
         const Point3f e = truncate_ray(o, p, max_range);
         if (rounding.point_to_key(e, k)) add_ray<true>(e, k);
       }
@@ -287,7 +333,8 @@ class ScanInserter {
   // Fills the workers' Parts (in parallel when the points allow random access) and merges their
   // boxes and counts: the scan's rays are the union of all Parts' rays.
   template <class Points>
-  void collect(const Points& points, double max_range, bool discretize, ScanStats& st) {
+  void collect(const Points& points, double max_range, bool discretize,
+               const EndpointRating* ratings, ScanStats& st) {
     const Grid<Key>& grid = map_->grid();
     Key ko;
     origin_in_range_ = grid.point_to_key(origin_, ko);
@@ -327,14 +374,15 @@ class ScanInserter {
         part.rays.reserve(b - a);  // one allocation, not a doubling series
         part.hits.reserve(b - a);
         collector(w).add_points(first + static_cast<std::ptrdiff_t>(a),
-                                first + static_cast<std::ptrdiff_t>(b));
+                                first + static_cast<std::ptrdiff_t>(b),
+                                ratings ? ratings + a : nullptr);
       };
       if (parts == 1)
         job(0u);
       else
         run(job);
     } else {
-      collector(0).add_points(std::begin(points), std::end(points));
+      collector(0).add_points(std::begin(points), std::end(points), ratings);
     }
 
     steps_ = 0;
@@ -386,6 +434,14 @@ class ScanInserter {
   }
 
   // ---- 2. walk --------------------------------------------------------------------------
+
+  void walk(ScanStats& st) {
+    if (hits_total_ == 0 && rays_total_ == 0) return;
+    if (dense_fits())
+      walk_dense(st);
+    else
+      walk_hashed(st);
+  }
 
   // Bits of dense scratch per ray step at most: beyond that, clearing and scanning the bitmap
   // would cost more than walking the rays.
@@ -645,16 +701,18 @@ class ScanInserter {
         u.slot = map_->brick_slot(u.coord);
         for (std::size_t i = 0; i < u.miss.w.size(); ++i) u.miss.w[i] &= ~u.hit.w[i];
       }
-    const float hit_l = model_.hit_logodds(), miss_l = model_.miss_logodds();
+    const float hit_l = hit_l_, miss_l = miss_l_;
+    const bool hits_here = !rated_;  // rated hits carry their own sums: apply_rated_hits()
     if (map_->change_detection_enabled()) {  // records per voxel, in one thread
       for (std::size_t g = 0; g < group_count_; ++g)
         for (const BrickUpdate& u : groups_[g]) {
           auto& brick = map_->brick_at(u.slot);
-          map_->update_masked(brick, u.hit, hit_l);
+          if (hits_here) map_->update_masked(brick, u.hit, hit_l);
           map_->update_masked(brick, u.miss, miss_l);
-          st.occupied_voxels += static_cast<std::size_t>(u.hit.count());
+          if (hits_here) st.occupied_voxels += static_cast<std::size_t>(u.hit.count());
           st.free_voxels += static_cast<std::size_t>(u.miss.count());
         }
+      if (rated_) apply_rated_hits(st);
       return;
     }
     next_chunk_->store(0, std::memory_order_relaxed);
@@ -665,9 +723,11 @@ class ScanInserter {
            (g = next_chunk_->fetch_add(1, std::memory_order_relaxed)) < group_count_;)
         for (const BrickUpdate& u : groups_[g]) {
           auto& brick = map_->brick_at(u.slot);
-          worker.added += map_->update_brick(brick, u.hit, hit_l);
+          if (hits_here) {
+            worker.added += map_->update_brick(brick, u.hit, hit_l);
+            worker.occupied += static_cast<std::size_t>(u.hit.count());
+          }
           worker.added += map_->update_brick(brick, u.miss, miss_l);
-          worker.occupied += static_cast<std::size_t>(u.hit.count());
           worker.free += static_cast<std::size_t>(u.miss.count());
         }
     };
@@ -676,6 +736,29 @@ class ScanInserter {
       st.occupied_voxels += workers_[w]->occupied;
       st.free_voxels += workers_[w]->free;
       map_->add_known(workers_[w]->added);
+    }
+    if (rated_) apply_rated_hits(st);
+  }
+
+  // Eq 15: every endpoint voxel gets the sum of its endpoints' log-odds, summed in double in
+  // point order (Parts hold consecutive points in worker order) and applied in key order, so the
+  // map does not depend on the thread count. Their bricks exist already (update_groups).
+  void apply_rated_hits(ScanStats& st) {
+    sums_.clear();
+    for (unsigned w = 0; w < threads_; ++w) {
+      const Part& part = workers_[w]->part;
+      for (std::size_t j = 0; j < part.hits.size(); ++j)
+        sums_.push_back({part.hits[j], sums_.size(), part.hit_logodds[j]});
+    }
+    std::sort(sums_.begin(), sums_.end(), [](const RatedHit& a, const RatedHit& b) {
+      return a.key != b.key ? a.key < b.key : a.order < b.order;
+    });
+    for (std::size_t j = 0; j < sums_.size();) {
+      const std::uint64_t key = sums_[j].key;
+      double sum = 0.0;
+      for (; j < sums_.size() && sums_[j].key == key; ++j) sum += sums_[j].logodds;
+      map_->update(Key::unpack(key), static_cast<float>(sum));
+      ++st.occupied_voxels;
     }
   }
 
@@ -704,6 +787,15 @@ class ScanInserter {
   std::vector<std::vector<BrickUpdate>> groups_;  // touched bricks, z, y, x order overall
   std::size_t group_count_ = 0;
   std::vector<std::uint32_t> order_;  // hashed path: scratch slots in z, y, x order
+  // The kind of scan being inserted.
+  bool rated_ = false;
+  float hit_l_ = 0.0f, miss_l_ = 0.0f;
+  struct RatedHit {
+    std::uint64_t key;
+    std::size_t order;
+    float logodds;
+  };
+  std::vector<RatedHit> sums_;  // insert_rated: the scan's endpoints, sorted by key
 };
 
 /// One-shot convenience: OctoMap's insertPointCloud with the default model. For many scans keep

@@ -11,6 +11,9 @@
 namespace knnocc {
 
 struct OctoMapModel {
+  /// Needs no k-NN statistics of the map point cloud (see Mapper).
+  static constexpr bool uses_map_cloud = false;
+
   float hit = logodds(0.7);   ///< l_occ = 0.847297847
   float miss = logodds(0.4);  ///< l_free = -0.405465096
 

@@ -1,0 +1,222 @@
+#pragma once
+// Mapper: one keyframe at a time into an occupancy map (paper Alg. 3, with Alg. 2 before it when
+// the sensor model needs the map point cloud). The parts are template parameters:
+//
+//   Model    the inverse sensor model: OctoMapModel (eq 4) or KnnModel (eq 13-15)
+//   Key      the map's key type (OcKey: OctoMap's 16-bit keys; WideKey for larger areas)
+//   Tracker  s_p and the normal distribution of the map point cloud (KnnTracker), kept only when
+//            Model::uses_map_cloud
+//   Caster   the ray caster that applies a scan to the map (ScanInserter: exact DDA, occupied
+//            wins, one update per voxel per scan)
+//
+// so Mapper<OctoMapModel> and Mapper<KnnModel> differ in one type and take the same keyframes.
+//
+// One keyframe (insert_keyframe): its points in the world frame, the sensor position, and the
+// map-point ids of the points when the source has them (ORB-SLAM map points). The map point cloud
+// is the union of the keyframes' points (KeyframeUnion: an id joins once, at its first position;
+// without ids every point of every keyframe is a new map point), or the caller gives its change
+// explicitly (e.g. after bundle adjustment or map-point culling).
+//   OctoMapModel: OctoMap's insertPointCloud(points, origin, max_range, discretize).
+//   KnnModel:     the change goes through the tracker (Alg. 2), every endpoint is rated with its
+//                 s_{p,t} (eq 13, 14) and the scan applied with per-voxel sums (eq 15, Alg. 3).
+// max_range keeps OctoMap's meaning for both models: a point farther than max_range from the
+// sensor marks nothing occupied, casts its ray truncated at max_range, and (k-NN model) stays out
+// of the map point cloud.
+//
+// Thread safety: one writer; const queries (map(), tracker()) are safe from many threads while no
+// insert runs.
+
+#include <cmath>
+#include <cstdint>
+#include <iterator>
+#include <limits>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "core/config.hpp"
+#include "core/key.hpp"
+#include "core/point3.hpp"
+#include "core/point_traits.hpp"
+#include "knn/change_set.hpp"
+#include "knn/tracker.hpp"
+#include "map/occupancy_map.hpp"
+#include "map/scan_inserter.hpp"
+#include "raycast/dda.hpp"
+#include "sensor/endpoint_rating.hpp"
+#include "sensor/octomap_model.hpp"
+
+namespace knnocc {
+
+struct MapperOptions {
+  double max_range = -1.0;  ///< < 0: no limit; 0 or NaN rejected
+  bool discretize = false;  ///< OctoMapModel only: endpoints reduced to their distinct voxels
+  unsigned threads = 1;     ///< threads that walk the rays of a scan (the map is the same)
+  OccupancyParams occupancy = {};
+};
+
+/// What one insert_keyframe() did.
+struct KeyframeStats {
+  ScanStats scan;          ///< the map update
+  TrackerUpdate tracker;   ///< the map point cloud's change (k-NN model; zero otherwise)
+  std::size_t rated = 0;   ///< endpoints rated from the tracker (k-NN model)
+  std::size_t rays = 0;    ///< of those, the reliable ones that cast a free ray (eq 14)
+  std::size_t unrated = 0; ///< endpoints without an s (fewer than k neighbours, or no id)
+};
+
+namespace detail {
+template <class M, class = void>
+struct uses_map_cloud : std::false_type {};
+template <class M>
+struct uses_map_cloud<M, std::void_t<decltype(M::uses_map_cloud)>>
+    : std::bool_constant<M::uses_map_cloud> {};
+struct NoTracker {};
+}  // namespace detail
+
+template <class Model = OctoMapModel, class Key = OcKey, class Tracker = KnnTracker<>,
+          class Caster = ScanInserter<Key, Model>>
+class Mapper {
+ public:
+  using model_type = Model;
+  using key_type = Key;
+  using map_type = OccupancyMap<Key>;
+  using tracker_type = Tracker;
+  static constexpr bool uses_map_cloud = detail::uses_map_cloud<Model>::value;
+
+  /// Rejects resolution <= 0 and bad options (std::invalid_argument; abort without exceptions).
+  explicit Mapper(double resolution, Model model = Model(), MapperOptions options = {})
+      : options_(checked(options)), map_(resolution, options.occupancy), model_(model),
+        tracker_(make_tracker(model)), caster_(map_, model, options.threads) {}
+  Mapper(Mapper&&) = delete;  // the caster points at the map
+
+  const map_type& map() const { return map_; }
+  map_type& map() { return map_; }
+  const Model& model() const { return model_; }
+  const MapperOptions& options() const { return options_; }
+  /// The k-NN statistics of the map point cloud (only with a model that uses them).
+  template <bool B = uses_map_cloud, std::enable_if_t<B, int> = 0>
+  const Tracker& tracker() const {
+    return tracker_;
+  }
+
+  /// Alg. 3 for one keyframe: `points` in the world frame (any point type), seen from `origin`;
+  /// `ids` one map-point id per point, or empty (then each point is a new map point). A sequence
+  /// must either always or never give ids. The OctoMap model ignores ids.
+  template <class Points, class Origin>
+  KeyframeStats insert_keyframe(const Origin& origin, const Points& points,
+                                const std::vector<std::uint64_t>& ids = {}) {
+    KeyframeStats ks;
+    if constexpr (!uses_map_cloud) {
+      (void)ids;
+      ks.scan = caster_.insert_point_cloud(origin, points, options_.max_range, options_.discretize);
+    } else {
+      load(origin, points);
+      if (!ids.empty() && ids.size() != world_.size())
+        detail::invalid_argument("insert_keyframe: one id per point expected");
+      // Points beyond max_range stay out of the map cloud (they still cast their truncated ray).
+      cloud_.clear();
+      cloud_ids_.clear();
+      for (std::size_t j = 0; j < world_.size(); ++j)
+        if (within_range(j)) {
+          cloud_.push_back(world_[j]);
+          if (!ids.empty()) cloud_ids_.push_back(ids[j]);
+        }
+      const ChangeSet change = union_.add(cloud_, cloud_ids_, &cloud_map_ids_);
+      point_ids_.assign(world_.size(), KeyframeUnion::kNoId);
+      for (std::size_t j = 0, c = 0; j < world_.size(); ++j)
+        if (within_range(j)) point_ids_[j] = cloud_map_ids_[c++];
+      ks.tracker = tracker_.apply(change);
+      rate_and_insert(ks);
+    }
+    return ks;
+  }
+
+  /// Alg. 3 with the map cloud's change given by the caller (k-NN model): `change` is applied to
+  /// the tracker first, then the points (ids: one per point, the map points they observe) are
+  /// rated with their s_{p,t}. A point whose id is not in the map cloud gets no s (unrated).
+  template <class Points, class Origin, bool B = uses_map_cloud, std::enable_if_t<B, int> = 0>
+  KeyframeStats insert_keyframe(const Origin& origin, const Points& points,
+                                const std::vector<std::uint64_t>& ids, const ChangeSet& change) {
+    load(origin, points);
+    if (ids.size() != world_.size())
+      detail::invalid_argument("insert_keyframe: one id per point expected");
+    KeyframeStats ks;
+    ks.tracker = tracker_.apply(change);
+    point_ids_.assign(world_.size(), KeyframeUnion::kNoId);
+    for (std::size_t j = 0; j < world_.size(); ++j)
+      if (within_range(j)) point_ids_[j] = ids[j];
+    rate_and_insert(ks);
+    return ks;
+  }
+
+ private:
+  using TrackerMember = std::conditional_t<uses_map_cloud, Tracker, detail::NoTracker>;
+
+  static const MapperOptions& checked(const MapperOptions& o) {
+    if (o.max_range == 0.0 || std::isnan(o.max_range))
+      detail::invalid_argument("max_range must be > 0, or < 0 for no limit");
+    if (o.threads < 1) detail::invalid_argument("threads must be >= 1");
+    if (uses_map_cloud && o.discretize)
+      detail::invalid_argument("discretize applies to the OctoMap model only");
+    return o;
+  }
+
+  static TrackerMember make_tracker(const Model& model) {
+    if constexpr (uses_map_cloud)
+      return Tracker(model.tracker_params());
+    else
+      return TrackerMember{};
+  }
+
+  template <class Origin, class Points>
+  void load(const Origin& origin, const Points& points) {
+    origin_ = to_point3d(origin);
+    world_.clear();
+    for (const auto& p : points) world_.push_back(to_point3d(p));
+  }
+
+  // The caster's max-range test (OctoMap's float norm), so the map cloud holds exactly the
+  // points that make an occupied update.
+  bool within_range(std::size_t j) const {
+    const Point3d& p = world_[j];
+    if (!is_finite(p)) return false;
+    if (options_.max_range < 0.0) return true;
+    const auto f = [](double v) { return static_cast<float>(v); };
+    return detail::octomap_norm(f(p.x) - f(origin_.x), f(p.y) - f(origin_.y),
+                                f(p.z) - f(origin_.z)) <= options_.max_range;
+  }
+
+  // Eq 13-15 for the loaded keyframe, then the scan (Alg. 3).
+  void rate_and_insert(KeyframeStats& ks) {
+    ratings_.resize(world_.size());
+    const RunningNormal& dist = tracker_.distribution();
+    for (std::size_t j = 0; j < world_.size(); ++j) {
+      const std::uint64_t id = point_ids_[j];
+      if (id == KeyframeUnion::kNoId) {  // beyond max_range (or non-finite): truncated ray only
+        ratings_[j] = EndpointRating{0.0f, true};
+        continue;
+      }
+      const double s = tracker_.contains(id) ? tracker_.s(id)
+                                             : std::numeric_limits<double>::quiet_NaN();
+      ratings_[j] = model_.rate(s, dist);
+      ++ks.rated;
+      ks.unrated += std::isnan(s);
+      ks.rays += ratings_[j].casts_ray;
+    }
+    ks.scan = caster_.insert_rated(origin_, world_, ratings_, options_.max_range);
+  }
+
+  MapperOptions options_;
+  map_type map_;
+  Model model_;
+  TrackerMember tracker_;
+  Caster caster_;
+  // k-NN model: the keyframe being inserted (kept for their memory).
+  KeyframeUnion union_;
+  Point3d origin_;
+  std::vector<Point3d> world_, cloud_;
+  std::vector<std::uint64_t> cloud_ids_, cloud_map_ids_, point_ids_;
+  std::vector<EndpointRating> ratings_;
+};
+
+}  // namespace knnocc

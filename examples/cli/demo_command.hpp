@@ -1,202 +1,205 @@
 #pragma once
-// knnocc demo: the embedded default job. A simulated 16-beam LiDAR scans a furnished room from
-// eight poses; the scans are inserted with the OctoMap model, checked against the room's true
-// geometry, and a top view of the map is printed. Needs no data files.
+// knnocc demo: the embedded default job, the paper's experiment (section 4) on the simulated tree
+// scene: both inverse sensor models map the same keyframes, and the maps are compared with the
+// reference shapes (Table 1), over several seeds. Needs no data files.
+// `knnocc demo --scene room` runs the LiDAR room demo instead (room_demo.hpp).
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <random>
+#include <filesystem>
 #include <string>
 #include <vector>
 
+#include <knnocc/eval/metrics.hpp>
+#include <knnocc/eval/reference.hpp>
+#include <knnocc/io/ply.hpp>
 #include <knnocc/io/voxel_list.hpp>
-#include <knnocc/map/scan_inserter.hpp>
+#include <knnocc/mapper.hpp>
+#include <knnocc/sensor/knn_model.hpp>
+#include <knnocc/sim/tree_scene.hpp>
 
 #include "args.hpp"
+#include "map_command.hpp"
+#include "room_demo.hpp"
 
 namespace knnocc::cli {
 
+inline const char* demo_help() {
+  return R"(usage: knnocc demo [--seeds N] [--first-seed S] [--res R] [--crop M] [--out DIR]
+                   [k-NN model flags of `knnocc map`: --k --w --p-upper --p-w --p-free --s-limit]
+       knnocc demo --scene room      (the LiDAR room demo, see knnocc demo --scene room --help)
+
+The paper's experiment (section 4) on the simulated tree scene (`knnocc sim`): for each seed the
+same keyframes (points within --crop 4 m of the camera) are mapped at --res 0.1 m with the OctoMap
+model and with the k-NN model, and each map is compared with the reference shapes (`knnocc eval`).
+Prints one row per seed and model, then Table 1 as mean and standard deviation over the seeds,
+and the k-NN model's figures relative to the OctoMap model's.
+  --seeds N        how many seeds (default 5), starting at --first-seed (default 1)
+  --out DIR        also write, for the first seed: the sequence folder (DIR/scene), the reference
+                   (DIR/scene/reference.txt) and both maps as voxel lists (DIR/<model>.voxels) and
+                   as PLY points of the occupied voxels (DIR/<model>_occupied.ply)
+)";
+}
+
 namespace demo {
 
-struct Box {
-  std::array<double, 3> lo, hi;
+struct Row {
+  eval::Metrics m;
+  double median_ms = 0;
 };
 
-// A 10 m x 8 m x 3 m room: floor, ceiling, four walls, a partition with a door, furniture.
-inline std::vector<Box> room() {
-  return {
-      {{-0.2, -0.2, -0.2}, {10.2, 8.2, 0.0}},  // floor
-      {{-0.2, -0.2, 3.0}, {10.2, 8.2, 3.2}},   // ceiling
-      {{-0.2, -0.2, 0.0}, {0.0, 8.2, 3.0}},    // walls
-      {{10.0, -0.2, 0.0}, {10.2, 8.2, 3.0}},
-      {{-0.2, -0.2, 0.0}, {10.2, 0.0, 3.0}},
-      {{-0.2, 8.0, 0.0}, {10.2, 8.2, 3.0}},
-      {{6.0, 0.0, 0.0}, {6.2, 3.0, 3.0}},  // partition, door between y = 3 and 4.2
-      {{6.0, 4.2, 0.0}, {6.2, 8.0, 3.0}},
-      {{6.0, 3.0, 2.1}, {6.2, 4.2, 3.0}},   // lintel above the door
-      {{2.0, 2.0, 0.0}, {3.6, 3.0, 0.75}},  // table
-      {{4.5, 5.5, 0.0}, {4.9, 5.9, 3.0}},   // pillar
-      {{0.0, 6.6, 0.0}, {1.8, 8.0, 2.0}},   // cabinet
-      {{8.0, 1.0, 0.0}, {9.2, 2.0, 1.2}},   // crate in the second room
-  };
+template <class Model>
+Row run_model(const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& ref, double res,
+              double crop, const Model& model, const std::string& out_dir, const char* name) {
+  Mapper<Model> mapper(res, model);
+  std::vector<double> us = sim::map_keyframes(mapper, kfs, crop);
+  std::sort(us.begin(), us.end());
+  Row row{eval::evaluate(mapper.map(), ref), us.empty() ? 0.0 : us[us.size() / 2] / 1000.0};
+  if (!out_dir.empty()) {
+    const auto& g = mapper.map().grid();
+    std::vector<io::VoxelRecord> voxels;
+    std::vector<Point3f> occupied;
+    mapper.map().for_each_voxel([&](const OcKey& k, float v) {
+      const double x = g.index_to_coord(k[0]), y = g.index_to_coord(k[1]), z = g.index_to_coord(k[2]);
+      voxels.push_back({x, y, z, v});
+      if (mapper.map().is_occupied(v))
+        occupied.push_back({static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
+    });
+    const std::filesystem::path dir(out_dir);
+    io::write_voxel_list((dir / (std::string(name) + ".voxels")).string(), std::move(voxels));
+    io::write_ply((dir / (std::string(name) + "_occupied.ply")).string(), occupied);
+  }
+  return row;
 }
 
-// Nearest t > 0 where origin + t * dir enters any box (slab test), or +inf.
-inline double first_hit(const std::vector<Box>& boxes, const std::array<double, 3>& o,
-                        const std::array<double, 3>& d) {
-  double best = INFINITY;
-  for (const Box& b : boxes) {
-    double t0 = 1e-9, t1 = best;
-    for (int a = 0; a < 3 && t0 <= t1; ++a) {
-      if (d[a] == 0.0) {
-        if (o[a] < b.lo[a] || o[a] > b.hi[a]) t0 = INFINITY;
-        continue;
-      }
-      double ta = (b.lo[a] - o[a]) / d[a], tb = (b.hi[a] - o[a]) / d[a];
-      if (ta > tb) std::swap(ta, tb);
-      t0 = std::max(t0, ta);
-      t1 = std::min(t1, tb);
-    }
-    if (t0 <= t1) best = t0;
-  }
-  return best;
-}
-
-// Does the voxel centred at c (edge r) overlap a box?
-inline bool touches_solid(const std::vector<Box>& boxes, const std::array<double, 3>& c, double r) {
-  for (const Box& b : boxes) {
-    bool overlap = true;
-    for (int a = 0; a < 3; ++a)
-      overlap = overlap && c[a] + r / 2 > b.lo[a] - 1e-9 && c[a] - r / 2 < b.hi[a] + 1e-9;
-    if (overlap) return true;
-  }
-  return false;
-}
-
-// Is the voxel centred at c strictly inside a box (at least half a voxel from its faces)?
-inline bool inside_solid(const std::vector<Box>& boxes, const std::array<double, 3>& c, double r) {
-  for (const Box& b : boxes) {
-    bool inside = true;
-    for (int a = 0; a < 3; ++a) inside = inside && c[a] - r / 2 > b.lo[a] && c[a] + r / 2 < b.hi[a];
-    if (inside) return true;
-  }
-  return false;
+struct Spread {
+  double mean = 0, sd = 0;
+};
+template <class F>
+Spread spread(const std::vector<Row>& rows, F f) {
+  Spread s;
+  for (const Row& r : rows) s.mean += f(r);
+  s.mean /= static_cast<double>(rows.size());
+  for (const Row& r : rows) s.sd += (f(r) - s.mean) * (f(r) - s.mean);
+  s.sd = rows.size() > 1 ? std::sqrt(s.sd / static_cast<double>(rows.size() - 1)) : 0.0;
+  return s;
 }
 
 }  // namespace demo
 
-inline const char* demo_help() {
-  return R"(usage: knnocc demo [--res R] [--seed S] [--out-voxels FILE]
-
-The embedded default job: a simulated 16-beam LiDAR (1 degree azimuth, 1 cm range noise,
-12 m range) scans a furnished 10 m x 8 m room from 8 poses; the scans go through the OctoMap
-model at --res (default 0.1 m). Prints the summary line of `knnocc map`, a check against the
-room's true geometry, and a top view of the map at sensor height.
-)";
-}
-
 inline int run_demo(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--res", "--seed", "--out-voxels"}, {});
+  const auto at = std::find(argv.begin(), argv.end(), "--scene");
+  if (at != argv.end() && at + 1 != argv.end()) {
+    if (at[1] == "room") return run_room_demo(argv);
+    if (at[1] != "tree") throw UsageError("--scene must be tree or room, got '" + at[1] + "'");
+  }
+  const Args args(argv,
+                  {"--scene", "--seeds", "--first-seed", "--res", "--crop", "--out", "--k", "--w",
+                   "--p-upper", "--p-w", "--p-free", "--s-limit"},
+                  {});
   if (args.help()) {
     std::fputs(demo_help(), stdout);
     return 0;
   }
+  const long seeds = args.integer("--seeds", 5), first = args.integer("--first-seed", 1);
+  if (seeds < 1 || seeds > 1000) throw UsageError("--seeds must be in [1, 1000]");
+  if (first < 0) throw UsageError("--first-seed must be >= 0");
   const double res = args.number("--res", 0.1);
   if (!(res >= 0.02 && res <= 1.0)) throw UsageError("--res must be in [0.02, 1] for the demo");
-  const long seed = args.integer("--seed", 1);
-
-  const auto boxes = demo::room();
-  const std::array<std::array<double, 3>, 8> poses = {{{1.0, 1.0, 1.2},
-                                                       {3.0, 4.5, 1.2},
-                                                       {1.2, 5.5, 1.2},
-                                                       {4.0, 7.0, 1.2},
-                                                       {5.0, 3.6, 1.2},
-                                                       {7.5, 3.6, 1.2},
-                                                       {8.5, 6.5, 1.2},
-                                                       {7.0, 1.0, 1.2}}};
-  std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
-  std::normal_distribution<double> noise(0.0, 0.01);
-  constexpr double kPi = 3.14159265358979323846;
-  constexpr double kRange = 12.0;
+  const double crop = args.number("--crop", 4.0);
+  if (!(crop > 0)) throw UsageError("--crop must be > 0");
+  const KnnModel knn(knn_params(args));
+  const KnnModelParams& kp = knn.params();
+  const std::string out = args.str("--out");
 
   std::printf(
-      "knnocc demo: simulated 16-beam LiDAR in a 10 m x 8 m room, %zu scans, "
-      "OctoMap model at %g m (seed %ld)\n",
-      poses.size(), res, seed);
+      "knnocc demo: the paper's experiment on the simulated tree scene (stereo camera circling at "
+      "3.5 m),\n%ld seeds, %g m map, points within %g m; k-NN model k %zu w %g P_u %g P_w %g "
+      "s_limit %g\n\n",
+      seeds, res, crop, kp.k, kp.w, kp.p_upper, kp.p_w, kp.s_limit);
+  std::printf("%-5s %-8s %8s %8s %6s %8s %8s %10s %11s %8s\n", "seed", "model", "occupied", "free",
+              "shell", "in_shell", "covered", "irrelevant", "free_inside", "ms/kf");
   const auto t0 = std::chrono::steady_clock::now();
-  OccupancyMap<OcKey> map(res);
-  ScanInserter<OcKey> inserter(map);
-  std::size_t points = 0;
-  std::vector<Point3f> scan;
-  for (const auto& o : poses) {
-    scan.clear();
-    for (int beam = 0; beam < 16; ++beam) {
-      const double el = (-15.0 + 2.0 * beam) * kPi / 180.0;
-      for (int az = 0; az < 360; ++az) {
-        const double a = az * kPi / 180.0;
-        const std::array<double, 3> d = {std::cos(el) * std::cos(a), std::cos(el) * std::sin(a),
-                                         std::sin(el)};
-        const double t = demo::first_hit(boxes, o, d);
-        if (!(t < kRange)) continue;  // no return
-        const double r = t + noise(rng);
-        scan.push_back(
-            Point3f{float(o[0] + r * d[0]), float(o[1] + r * d[1]), float(o[2] + r * d[2])});
-      }
+  std::vector<demo::Row> octo_rows, knn_rows;
+  std::size_t shell = 0, points = 0, outliers = 0;
+  for (long s = first; s < first + seeds; ++s) {
+    sim::TreeSceneParams sp;
+    sp.seed = static_cast<std::uint64_t>(s);
+    sim::TreeScene scene(sp);
+    const auto kfs = scene.keyframes();
+    for (const auto& kf : kfs) {
+      points += kf.cloud.points.size();
+      outliers += kf.outliers;
     }
-    points +=
-        inserter.insert_point_cloud(Point3f{float(o[0]), float(o[1]), float(o[2])}, scan).points;
+    std::string dir;
+    if (!out.empty() && s == first) {
+      dir = out;
+      const std::string seq = (std::filesystem::path(out) / "scene").string();
+      std::vector<io::Pose> poses;
+      std::vector<const io::Cloud*> clouds;
+      for (const auto& kf : kfs) {
+        poses.push_back(kf.pose);
+        clouds.push_back(&kf.cloud);
+      }
+      io::write_sequence(seq, poses, clouds);
+      eval::write_reference((std::filesystem::path(seq) / "reference.txt").string(),
+                            scene.reference());
+    }
+    const demo::Row o =
+        demo::run_model(kfs, scene.reference(), res, crop, OctoMapModel{}, dir, "octomap");
+    const demo::Row k = demo::run_model(kfs, scene.reference(), res, crop, knn, dir, "knn");
+    for (const auto& [name, r] : {std::pair<const char*, const demo::Row&>{"octomap", o},
+                                  std::pair<const char*, const demo::Row&>{"knn", k}})
+      std::printf("%-5ld %-8s %8zu %8zu %6zu %8zu %8zu %10zu %11zu %8.3f\n", s, name,
+                  r.m.occupied, r.m.free, r.m.shell, r.m.in_shell, r.m.covered, r.m.irrelevant,
+                  r.m.free_inside, r.median_ms);
+    octo_rows.push_back(o);
+    knn_rows.push_back(k);
+    shell += o.m.shell;
   }
+
+  using demo::spread;
+  auto table_row = [&](const char* name, const std::vector<demo::Row>& rows) {
+    const auto a = spread(rows, [](const demo::Row& r) { return double(r.m.in_shell); });
+    const auto b = spread(rows, [](const demo::Row& r) { return double(r.m.covered); });
+    const auto c = spread(rows, [](const demo::Row& r) { return double(r.m.irrelevant); });
+    const auto d = spread(rows, [](const demo::Row& r) { return double(r.m.free_inside); });
+    std::printf("%-14s %9.1f ± %-5.1f %9.1f ± %-5.1f %9.1f ± %-5.1f %9.1f ± %-5.1f\n", name, a.mean,
+                a.sd, b.mean, b.sd, c.mean, c.sd, d.mean, d.sd);
+  };
+  std::printf(
+      "\nTable 1 (mean ± sd over %ld seeds; the reference shell has %.0f voxels on average)\n"
+      "%-14s %17s %17s %17s %17s\n",
+      seeds, double(shell) / double(seeds), "model", "nodes in shell", "nodes covered",
+      "irrelevant nodes", "free inside objs");
+  table_row("OctoMap model", octo_rows);
+  table_row("k-NN model", knn_rows);
+
+  auto total = [](const std::vector<demo::Row>& rows, auto f) {
+    double t = 0;
+    for (const auto& r : rows) t += f(r);
+    return t;
+  };
+  const double irr_o = total(octo_rows, [](const demo::Row& r) { return double(r.m.irrelevant); });
+  const double irr_k = total(knn_rows, [](const demo::Row& r) { return double(r.m.irrelevant); });
+  const double sh_o = total(octo_rows, [](const demo::Row& r) { return double(r.m.in_shell); });
+  const double sh_k = total(knn_rows, [](const demo::Row& r) { return double(r.m.in_shell); });
+  const double irr_pct = irr_o > 0 ? 100.0 * irr_k / irr_o : 0.0;
+  const double shell_pct = sh_o > 0 ? 100.0 * sh_k / sh_o : 0.0;
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const auto counts = map.count_voxels();
-  std::printf("clouds %zu points %zu occupied %zu free %zu seconds %.3f\n", poses.size(), points,
-              counts.occupied, counts.free, seconds);
-
-  // Check against the true geometry.
-  std::size_t on_surface = 0, free_inside = 0;
-  const auto& g = map.grid();
-  map.for_each_voxel([&](const OcKey& k, float v) {
-    const std::array<double, 3> c = {g.index_to_coord(k[0]), g.index_to_coord(k[1]),
-                                     g.index_to_coord(k[2])};
-    if (map.is_occupied(v))
-      on_surface += demo::touches_solid(boxes, c, res);
-    else
-      free_inside += demo::inside_solid(boxes, c, res);
-  });
   std::printf(
-      "check: %zu of %zu occupied voxels touch a real surface (%.1f %%); "
-      "%zu free voxels lie inside solid objects\n",
-      on_surface, counts.occupied, counts.occupied ? 100.0 * on_surface / counts.occupied : 0.0,
-      free_inside);
-
-  // Top view at sensor height from coarse-depth queries (2x2x2 voxels per character).
-  std::printf(
-      "top view at z = 1.2 m, 2 voxels per character ('#' occupied, '.' free, ' ' unknown):\n");
-  const int depth = OcKey::depth - 1;
-  const double cell = g.node_size(depth);
-  for (double y = 8.3 - cell / 2; y > -0.3; y -= cell) {
-    std::string row;
-    for (double x = -0.3 + cell / 2; x < 10.3; x += cell) {
-      OcKey k;
-      char ch = ' ';
-      if (g.coord_to_key(x, y, 1.2, k))
-        if (const auto v = map.logodds_at_depth(k, depth)) ch = map.is_occupied(*v) ? '#' : '.';
-      row += ch;
-    }
-    std::printf("  %s\n", row.c_str());
-  }
-
-  if (args.has("--out-voxels")) {
-    std::vector<io::VoxelRecord> out;
-    map.for_each_voxel([&](const OcKey& k, float v) {
-      out.push_back({g.index_to_coord(k[0]), g.index_to_coord(k[1]), g.index_to_coord(k[2]), v});
-    });
-    io::write_voxel_list(args.str("--out-voxels"), std::move(out));
-    std::printf("wrote %s\n", args.str("--out-voxels").c_str());
-  }
+      "\nk-NN model / OctoMap model over all seeds: irrelevant nodes %.1f %% (goal <= 10 %%: %s), "
+      "nodes in shell %.1f %% (goal >= 97 %%: %s)\n"
+      "(paper, real data: irrelevant 4 / 33 = 12.1 %%, nodes in shell 387 / 399 = 97.0 %%)\n"
+      "%zu keyframe points, %zu of them wrong stereo matches; %.2f s in all\n",
+      irr_pct, irr_pct <= 10.0 ? "met" : "NOT met", shell_pct, shell_pct >= 97.0 ? "met" : "NOT met",
+      points, outliers, seconds);
+  if (!out.empty())
+    std::printf("wrote %s/{octomap,knn}.voxels, %s/{octomap,knn}_occupied.ply, %s/scene/\n",
+                out.c_str(), out.c_str(), out.c_str());
   return 0;
 }
 

@@ -13,7 +13,9 @@
 
 #include "args.hpp"
 #include "demo_command.hpp"
+#include "eval_command.hpp"
 #include "map_command.hpp"
+#include "sim_command.hpp"
 #include "track_command.hpp"
 
 namespace {
@@ -21,9 +23,12 @@ namespace {
 const char* kUsage = R"(usage: knnocc <command> [options]     (knnocc <command> --help for details)
 
 commands:
-  demo     the embedded default job: simulated LiDAR scans of a room through the OctoMap model
-  map      build an occupancy map from a sequence folder or a point file
+  demo     the embedded default job: the paper's experiment on a simulated tree scene, OctoMap
+           model against k-NN model (Table 1); `demo --scene room`: a LiDAR room demo
+  map      build an occupancy map from a sequence folder or a point file (--model octomap|knn)
   track    follow s_p and its normal distribution over a keyframe sequence (k-NN tracker)
+  sim      write the simulated tree scene as a sequence folder plus its reference shapes
+  eval     compare a map with reference shapes (the paper's Table 1 metrics)
   version  print the version
 )";
 
@@ -40,6 +45,8 @@ int main(int argc, char** argv) {
     if (command == "map") return knnocc::cli::run_map(args);
     if (command == "demo") return knnocc::cli::run_demo(args);
     if (command == "track") return knnocc::cli::run_track(args);
+    if (command == "sim") return knnocc::cli::run_sim(args);
+    if (command == "eval") return knnocc::cli::run_eval(args);
     if (command == "version" || command == "--version") {
       std::printf("knnocc %s\n", KNNOCC_VERSION_STRING);
       return 0;

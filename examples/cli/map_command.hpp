@@ -1,16 +1,19 @@
 #pragma once
 // knnocc map: build an occupancy map from a sequence folder or a single point file.
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <knnocc/io/point_file.hpp>
 #include <knnocc/io/sequence.hpp>
 #include <knnocc/io/voxel_list.hpp>
-#include <knnocc/map/scan_inserter.hpp>
+#include <knnocc/mapper.hpp>
+#include <knnocc/sensor/knn_model.hpp>
 
 #include "args.hpp"
 #include "progress.hpp"
@@ -30,8 +33,9 @@ input (--input PATH):
   a point file          .ply, or ASCII .xyz/.dat/.txt (x y z per line); sensor at the origin
 options:
   --res R               voxel edge in metres (required, > 0)
-  --model octomap       inverse sensor model (default octomap: hit 0.7, miss 0.4,
-                        clamping 0.1192..0.971, OctoMap's insertPointCloud semantics)
+  --model octomap|knn   inverse sensor model (default octomap: hit 0.7, miss 0.4,
+                        clamping 0.1192..0.971, OctoMap's insertPointCloud semantics;
+                        knn: the paper's k-NN model, eq 13-15, see below)
   --max-range M         points farther than M from the sensor only free space up to M and
                         mark nothing occupied (OctoMap's maxrange); < 0: no limit (default)
   --crop M              drop points farther than M from their sensor before anything else
@@ -42,14 +46,148 @@ options:
   --voxels WHICH        which voxels --out-voxels writes: occupied, free or all (default)
   --threads N           threads that walk the rays of each cloud (default 1); the map is the
                         same for every N
+k-NN model (--model knn): the map point cloud is the union of the keyframes (clouds with an `id`
+property: ORB-SLAM map points, each joins once; without ids every point is a new map point);
+s_p = mean distance of p to its k nearest map points; the valid s_p (< s-limit) form N(mu, sigma).
+An endpoint gets Prob = P_u - Phi(s_p) / Phi(mu + w sigma) (P_u - P_w); its voxel receives the sum
+of logit(Prob) of its endpoints, and it casts a free ray only if Prob > P_w. Prints one more line
+before the summary: knn k K map_points N valid N mu X sigma X rays R of E median_keyframe_ms T
+  (defaults: the best of the sweep in README, `build/bin/bench_knn_sweep`)
+  --k K                 neighbours per map point (default 8)
+  --w W                 reliability threshold in sigmas above mu (default 0, in [-8, 8])
+  --p-upper P           P_u, probability of the most reliable endpoints (default 0.9)
+  --p-w P               P_w, probability at s = mu + w sigma (default 0.65; 0.5 < P_w < P_u < 1)
+  --p-free P            free-ray probability (default 0.4, OctoMap's miss; in (0, 0.5))
+  --s-limit X           valid map points have s_p < X (default: no limit)
+  (--discretize does not apply to the k-NN model)
 exit status: 0 success, 2 bad input (one line on stderr naming the file and the problem).
 )";
+}
+
+struct MapOptions {
+  std::string input, which, out_voxels;
+  double res = 0, max_range = -1, crop = -1;
+  bool discretize = false;
+  unsigned threads = 1;
+};
+
+/// The k-NN model's flags (defaults: the documented sweep's choice); UsageError when invalid.
+inline KnnModelParams knn_params(const Args& args) {
+  KnnModelParams p;
+  const long k = args.integer("--k", static_cast<long>(p.k));
+  if (k < 1 || k > 4096) throw UsageError("--k must be in [1, 4096], got " + args.str("--k"));
+  p.k = static_cast<std::size_t>(k);
+  p.w = args.number("--w", p.w);
+  p.p_upper = args.number("--p-upper", p.p_upper);
+  p.p_w = args.number("--p-w", p.p_w);
+  p.p_free = args.number("--p-free", p.p_free);
+  p.s_limit = args.number("--s-limit", p.s_limit);
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("k-NN model: ") + e.what());
+  }
+  return p;
+}
+
+template <class Model>
+int run_map_with(const MapOptions& opt, const Model& model) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Mapper<Model> mapper(opt.res, model,
+                       MapperOptions{opt.max_range, opt.discretize, opt.threads, {}});
+  ScanStats total;
+  std::size_t clouds = 0, rays = 0, rated = 0;
+  std::vector<double> keyframe_ms;
+  auto add = [&](const KeyframeStats& ks) {
+    total.points += ks.scan.points;
+    total.nonfinite += ks.scan.nonfinite;
+    total.out_of_range += ks.scan.out_of_range;
+    rays += ks.rays;
+    rated += ks.rated;
+    ++clouds;
+  };
+
+  if (io::is_sequence_dir(opt.input)) {
+    const auto seq = io::Sequence::open(opt.input);
+    Progress progress("map", seq.size());
+    std::vector<Point3d> world;
+    std::vector<std::uint64_t> ids;
+    for (std::size_t i = 0; i < seq.size(); ++i) {
+      const io::Cloud cloud = seq.load_cloud(i);
+      // --crop: distance to the sensor, measured in the sensor frame.
+      io::keyframe_to_world(seq.pose(i), cloud, opt.crop, world, ids);
+      const auto a = std::chrono::steady_clock::now();
+      try {
+        add(mapper.insert_keyframe(seq.pose(i).t, world, ids));
+      } catch (const std::invalid_argument& e) {  // e.g. clouds with and without ids mixed
+        throw io::Error(seq.cloud_path(i), e.what());
+      }
+      keyframe_ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
+      progress.update(i + 1);
+    }
+  } else {
+    io::Cloud cloud = io::read_points(opt.input);
+    if (opt.crop > 0.0) {
+      std::size_t kept = 0;
+      for (std::size_t j = 0; j < cloud.points.size(); ++j) {
+        const Point3f& p = cloud.points[j];
+        if (!(std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= opt.crop))
+          continue;
+        if (!cloud.ids.empty()) cloud.ids[kept] = cloud.ids[j];
+        cloud.points[kept++] = p;
+      }
+      cloud.points.resize(kept);
+      if (!cloud.ids.empty()) cloud.ids.resize(kept);
+    }
+    add(mapper.insert_keyframe(Point3f{}, cloud.points, cloud.ids));
+  }
+  const auto& map = mapper.map();
+
+  if (total.nonfinite)
+    std::fprintf(stderr, "knnocc map: %s: skipped %zu points with NaN/Inf coordinates\n",
+                 opt.input.c_str(), total.nonfinite);
+  if (total.out_of_range)
+    std::fprintf(stderr,
+                 "knnocc map: %s: skipped %zu points outside the map's key range (|c| >= %g m at "
+                 "--res %g); use a coarser --res\n",
+                 opt.input.c_str(), total.out_of_range, map.grid().max_coord(), opt.res);
+
+  if (!opt.out_voxels.empty()) {
+    std::vector<io::VoxelRecord> out;
+    out.reserve(map.num_voxels());
+    const auto& g = map.grid();
+    map.for_each_voxel([&](const OcKey& k, float v) {
+      const bool occ = map.is_occupied(v);
+      if (opt.which == "all" || (opt.which == "occupied") == occ)
+        out.push_back(io::VoxelRecord{g.index_to_coord(k[0]), g.index_to_coord(k[1]),
+                                      g.index_to_coord(k[2]), v});
+    });
+    io::write_voxel_list(opt.out_voxels, std::move(out));
+  }
+
+  if constexpr (Mapper<Model>::uses_map_cloud) {
+    const auto& tr = mapper.tracker();
+    std::sort(keyframe_ms.begin(), keyframe_ms.end());
+    const double median = keyframe_ms.empty() ? 0.0 : keyframe_ms[keyframe_ms.size() / 2];
+    std::printf(
+        "knn k %zu map_points %zu valid %zu mu %.6f sigma %.6f rays %zu of %zu "
+        "median_keyframe_ms %.3f\n",
+        tr.params().k, tr.size(), tr.N(), tr.mu(), tr.sigma(), rays, rated, median);
+  }
+  const auto counts = map.count_voxels();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("clouds %zu points %zu occupied %zu free %zu seconds %.3f\n", clouds, total.points,
+              counts.occupied, counts.free, seconds);
+  return 0;
 }
 
 inline int run_map(const std::vector<std::string>& argv) {
   const Args args(argv,
                   {"--input", "--res", "--model", "--max-range", "--crop", "--out-voxels",
-                   "--voxels", "--threads"},
+                   "--voxels", "--threads", "--k", "--w", "--p-upper", "--p-w", "--p-free",
+                   "--s-limit"},
                   {"--discretize"});
   if (args.help()) {
     std::fputs(map_help(), stdout);
@@ -63,91 +201,33 @@ inline int run_map(const std::vector<std::string>& argv) {
   // of skipping nearly every point.
   if (res < 1e-4) throw UsageError("--res " + args.str("--res") + " is too small (minimum 0.0001)");
   const std::string model = args.str("--model", "octomap");
-  if (model == "knn")
-    throw UsageError("--model knn is not available in this version yet; use --model octomap");
-  if (model != "octomap") throw UsageError("--model must be octomap or knn, got '" + model + "'");
-  const double max_range = args.number("--max-range", -1.0);
-  if (max_range == 0.0) throw UsageError("--max-range must be > 0, or < 0 for no limit");
-  const double crop = args.number("--crop", -1.0);
-  if (args.has("--crop") && !(crop > 0.0)) throw UsageError("--crop must be > 0");
-  const std::string which = args.str("--voxels", "all");
-  if (which != "all" && which != "occupied" && which != "free")
-    throw UsageError("--voxels must be occupied, free or all, got '" + which + "'");
-  const bool discretize = args.flag("--discretize");
+  if (model != "octomap" && model != "knn")
+    throw UsageError("--model must be octomap or knn, got '" + model + "'");
+  MapOptions opt;
+  opt.input = input;
+  opt.res = res;
+  opt.max_range = args.number("--max-range", -1.0);
+  if (opt.max_range == 0.0) throw UsageError("--max-range must be > 0, or < 0 for no limit");
+  opt.crop = args.number("--crop", -1.0);
+  if (args.has("--crop") && !(opt.crop > 0.0)) throw UsageError("--crop must be > 0");
+  opt.which = args.str("--voxels", "all");
+  if (opt.which != "all" && opt.which != "occupied" && opt.which != "free")
+    throw UsageError("--voxels must be occupied, free or all, got '" + opt.which + "'");
+  opt.discretize = args.flag("--discretize");
   const long threads = args.integer("--threads", 1);
   if (threads < 1 || threads > 1024)
     throw UsageError("--threads must be an integer from 1 to 1024, got '" + args.str("--threads") +
                      "'");
+  opt.threads = static_cast<unsigned>(threads);
+  opt.out_voxels = args.str("--out-voxels");
 
-  const auto t0 = std::chrono::steady_clock::now();
-  OccupancyMap<OcKey> map(res);
-  ScanInserter<OcKey> inserter(map, {}, static_cast<unsigned>(threads));
-  ScanStats total;
-  std::size_t clouds = 0;
-  std::vector<Point3f> world;
-
-  // --crop: distance to the sensor, measured while the points are still in the sensor frame.
-  auto apply_crop = [&](std::vector<Point3f>& pts) {
-    if (crop <= 0.0) return;
-    std::size_t kept = 0;
-    for (const Point3f& p : pts)
-      if (std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= crop)
-        pts[kept++] = p;
-    pts.resize(kept);
-  };
-  auto add = [&](const ScanStats& st) {
-    total.points += st.points;
-    total.nonfinite += st.nonfinite;
-    total.out_of_range += st.out_of_range;
-    ++clouds;
-  };
-
-  if (io::is_sequence_dir(input)) {
-    const auto seq = io::Sequence::open(input);
-    Progress progress("map", seq.size());
-    for (std::size_t i = 0; i < seq.size(); ++i) {
-      io::Cloud cloud = seq.load_cloud(i);
-      const auto& t = seq.pose(i).t;
-      apply_crop(cloud.points);
-      io::transform_to_world(seq.pose(i), cloud.points, world);
-      add(inserter.insert_point_cloud(Point3f{float(t.x()), float(t.y()), float(t.z())}, world,
-                                      max_range, discretize));
-      progress.update(i + 1);
-    }
-  } else {
-    io::Cloud cloud = io::read_points(input);
-    apply_crop(cloud.points);
-    add(inserter.insert_point_cloud(Point3f{}, cloud.points, max_range, discretize));
+  if (model == "octomap") {
+    for (const char* knn_only : {"--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"})
+      if (args.has(knn_only)) throw UsageError(std::string(knn_only) + " needs --model knn");
+    return run_map_with(opt, OctoMapModel{});
   }
-
-  if (total.nonfinite)
-    std::fprintf(stderr, "knnocc map: %s: skipped %zu points with NaN/Inf coordinates\n",
-                 input.c_str(), total.nonfinite);
-  if (total.out_of_range)
-    std::fprintf(stderr,
-                 "knnocc map: %s: skipped %zu points outside the map's key range (|c| >= %g m at "
-                 "--res %g); use a coarser --res\n",
-                 input.c_str(), total.out_of_range, map.grid().max_coord(), res);
-
-  if (args.has("--out-voxels")) {
-    std::vector<io::VoxelRecord> out;
-    out.reserve(map.num_voxels());
-    const auto& g = map.grid();
-    map.for_each_voxel([&](const OcKey& k, float v) {
-      const bool occ = map.is_occupied(v);
-      if (which == "all" || (which == "occupied") == occ)
-        out.push_back(io::VoxelRecord{g.index_to_coord(k[0]), g.index_to_coord(k[1]),
-                                      g.index_to_coord(k[2]), v});
-    });
-    io::write_voxel_list(args.str("--out-voxels"), std::move(out));
-  }
-
-  const auto counts = map.count_voxels();
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("clouds %zu points %zu occupied %zu free %zu seconds %.3f\n", clouds, total.points,
-              counts.occupied, counts.free, seconds);
-  return 0;
+  if (opt.discretize) throw UsageError("--discretize applies to --model octomap only");
+  return run_map_with(opt, KnnModel(knn_params(args)));
 }
 
 }  // namespace knnocc::cli

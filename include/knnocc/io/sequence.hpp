@@ -6,11 +6,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <system_error>
 #include <vector>
 
+#include "atomic_file.hpp"
 #include "cloud.hpp"
 #include "error.hpp"
 #include "ply.hpp"
@@ -115,6 +117,36 @@ inline void keyframe_to_world(const Pose& pose, const Cloud& cloud, double max_r
     world.push_back(Point3d{w.x(), w.y(), w.z()});
     if (!cloud.ids.empty()) ids.push_back(cloud.ids[j]);
   }
+}
+
+// Writes a sequence folder that Sequence::open reads back: clouds/NNNNNN.ply (binary, float xyz,
+// plus uint ids when the clouds have them) and poses.txt, written last, so a folder interrupted
+// half-way is not mistaken for a sequence. Each file is written atomically.
+inline void write_sequence(const std::string& dir, const std::vector<Pose>& poses,
+                           const std::vector<const Cloud*>& clouds) {
+  namespace fs = std::filesystem;
+  if (poses.size() != clouds.size())
+    throw Error(dir, "write_sequence: " + std::to_string(poses.size()) + " poses for " +
+                         std::to_string(clouds.size()) + " clouds");
+  std::error_code ec;
+  fs::create_directories(fs::path(dir) / "clouds", ec);
+  if (ec) throw Error(dir, "cannot create folder: " + ec.message());
+  for (std::size_t i = 0; i < clouds.size(); ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "%06zu.ply", i);
+    const Cloud& c = *clouds[i];
+    write_ply((fs::path(dir) / "clouds" / name).string(), c.points, c.ids.empty() ? nullptr : &c.ids);
+  }
+  std::string text = "# stamp tx ty tz qx qy qz qw (sensor to world)\n";
+  for (const Pose& p : poses) {
+    char line[256];
+    std::snprintf(line, sizeof line, "%.6f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", p.stamp, p.t.x(),
+                  p.t.y(), p.t.z(), p.q.x(), p.q.y(), p.q.z(), p.q.w());
+    text += line;
+  }
+  AtomicFile out((fs::path(dir) / "poses.txt").string());
+  out.write(text);
+  out.commit();
 }
 
 }  // namespace knnocc::io

@@ -68,8 +68,9 @@ int main(int argc, char** argv) {
     scenes.push_back({scene.keyframes(), scene.reference()});
     octo.add(run(scenes.back(), OctoMapModel{}));
   }
-  std::printf("OctoMap model, sums over the seeds: in_shell %.0f irrelevant %.0f free_inside %.0f\n\n",
-              octo.in_shell, octo.irrelevant, octo.free_inside);
+  std::printf(
+      "OctoMap model, sums over the seeds: in_shell %.0f irrelevant %.0f free_inside %.0f\n\n",
+      octo.in_shell, octo.irrelevant, octo.free_inside);
 
   struct Result {
     KnnModelParams p;
@@ -99,9 +100,10 @@ int main(int argc, char** argv) {
     if (a.t.irrelevant != b.t.irrelevant) return a.t.irrelevant < b.t.irrelevant;
     return a.t.in_shell > b.t.in_shell;
   });
-  std::printf("%zu combinations; those with nodes in shell >= 97 %% of the OctoMap model's, fewest "
-              "irrelevant first (percentages of the OctoMap model's sums):\n",
-              combos);
+  std::printf(
+      "%zu combinations; those with nodes in shell >= 97 %% of the OctoMap model's, fewest "
+      "irrelevant first (percentages of the OctoMap model's sums):\n",
+      combos);
   std::printf("%4s %8s %6s %6s %6s %12s %12s %12s\n", "k", "s_limit", "w", "P_u", "P_w",
               "irrelevant%", "in_shell%", "free_inside%");
   int shown = 0;

@@ -93,8 +93,8 @@ TEST_CASE("eval: distance to the solids agrees with dense sampling of their surf
     if (inside_sampled(ref, p)) {
       CHECK(d == 0.0);
     } else {
-      CHECK(d <= best + 1e-9);    // exact distance is never above a sampled one
-      CHECK(d >= best - 0.008);   // and the samples are 7 mm apart at most
+      CHECK(d <= best + 1e-9);   // exact distance is never above a sampled one
+      CHECK(d >= best - 0.008);  // and the samples are 7 mm apart at most
     }
   }
   CHECK(ref.distance({0.27 + 0.5, 0.0, 0.3}) == doctest::Approx(0.5));  // cuboid face

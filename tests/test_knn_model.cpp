@@ -20,7 +20,8 @@ double cdf_by_integration(double x, double mu, double sigma) {
   const int n = 20000;
   const double h = (x - a) / n;
   auto f = [&](double s) {
-    return std::exp(-(s - mu) * (s - mu) / (2 * sigma * sigma)) / std::sqrt(2 * M_PI * sigma * sigma);
+    return std::exp(-(s - mu) * (s - mu) / (2 * sigma * sigma)) /
+           std::sqrt(2 * M_PI * sigma * sigma);
   };
   double sum = f(a) + f(x);
   for (int i = 1; i < n; ++i) sum += f(a + i * h) * (i % 2 ? 4 : 2);
@@ -48,9 +49,9 @@ TEST_CASE("knn_model: eq 13 and the eq 14 gate match the formula evaluated indep
     const double denom = cdf_by_integration(w * sigma + mu, mu, sigma);
     double previous = 1.0;
     for (double s = 0.0; s < 0.6; s += 0.01) {
-      const double expect = std::max(
-          KnnModel::kMinProb,
-          p.p_upper - cdf_by_integration(s, mu, sigma) / denom * (p.p_upper - p.p_w));
+      const double expect =
+          std::max(KnnModel::kMinProb,
+                   p.p_upper - cdf_by_integration(s, mu, sigma) / denom * (p.p_upper - p.p_w));
       const double got = model.probability(s, dist);
       CHECK(got == doctest::Approx(expect).epsilon(1e-7));
       CHECK(got <= previous);  // more isolated points are less probable

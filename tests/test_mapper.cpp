@@ -193,7 +193,7 @@ TEST_CASE("mapper: eq 15 sums the endpoints of a voxel; unreliable endpoints fre
   p.w = 0.0;  // reliable iff s < mu
   Mapper<KnnModel> mapper(0.1, KnnModel(p));
   // Three tight pairs and one isolated point: s = 0.01 (x6) and 1.0 (x1 ... its neighbour is far).
-  const std::vector<Point3d> pts = {{1.01, 0.01, 0.01}, {1.02, 0.01, 0.01}, {1.01, 0.51, 0.01},
+  const std::vector<Point3d> pts = {{1.01, 0.01, 0.01}, {1.02, 0.01, 0.01},  {1.01, 0.51, 0.01},
                                     {1.02, 0.51, 0.01}, {1.01, -0.49, 0.01}, {1.02, -0.49, 0.01},
                                     {1.51, 2.01, 0.01}};
   const KeyframeStats ks = mapper.insert_keyframe(Point3d{0.01, 0.01, 0.01}, pts);

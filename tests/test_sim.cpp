@@ -52,7 +52,7 @@ TEST_CASE("sim: a seed gives the same scene; map points keep their id and positi
       auto [it, fresh] = seen.emplace(id, w);
       if (!fresh) {
         ++reobserved;
-        CHECK((it->second - w).norm() < 1e-5);  // the same world position (float rounding)
+        CHECK((it->second - w).norm() < 1e-5);       // the same world position (float rounding)
         CHECK(id < sim::TreeScene::kOutlierIdBase);  // wrong matches are seen once
       }
     }
@@ -78,10 +78,10 @@ TEST_CASE("sim: the k-NN model keeps wrong matches out of the map (the paper's T
     const eval::Metrics mo = eval::evaluate(octo.map(), scene.reference());
     const eval::Metrics mk = eval::evaluate(knn.map(), scene.reference());
     CAPTURE(seed);
-    CHECK(mo.irrelevant >= 30);                      // the OctoMap model invents nodes ...
-    CHECK(mk.irrelevant * 10 <= mo.irrelevant);      // ... the k-NN model <= 10 % of them
-    CHECK(mk.in_shell * 100 >= mo.in_shell * 97);    // and keeps the shell
-    CHECK(mk.free_inside < mo.free_inside);          // fewer rays through the objects
+    CHECK(mo.irrelevant >= 30);                    // the OctoMap model invents nodes ...
+    CHECK(mk.irrelevant * 10 <= mo.irrelevant);    // ... the k-NN model <= 10 % of them
+    CHECK(mk.in_shell * 100 >= mo.in_shell * 97);  // and keeps the shell
+    CHECK(mk.free_inside < mo.free_inside);        // fewer rays through the objects
     CHECK(mo.shell == mk.shell);
     CHECK(mo.shell > 1200);
   }

@@ -62,7 +62,8 @@ Row run_model(const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& r
     std::vector<io::VoxelRecord> voxels;
     std::vector<Point3f> occupied;
     mapper.map().for_each_voxel([&](const OcKey& k, float v) {
-      const double x = g.index_to_coord(k[0]), y = g.index_to_coord(k[1]), z = g.index_to_coord(k[2]);
+      const double x = g.index_to_coord(k[0]), y = g.index_to_coord(k[1]),
+                   z = g.index_to_coord(k[2]);
       voxels.push_back({x, y, z, v});
       if (mapper.map().is_occupied(v))
         occupied.push_back({static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
@@ -152,9 +153,9 @@ inline int run_demo(const std::vector<std::string>& argv) {
     const demo::Row k = demo::run_model(kfs, scene.reference(), res, crop, knn, dir, "knn");
     for (const auto& [name, r] : {std::pair<const char*, const demo::Row&>{"octomap", o},
                                   std::pair<const char*, const demo::Row&>{"knn", k}})
-      std::printf("%-5ld %-8s %8zu %8zu %6zu %8zu %8zu %10zu %11zu %8.3f\n", s, name,
-                  r.m.occupied, r.m.free, r.m.shell, r.m.in_shell, r.m.covered, r.m.irrelevant,
-                  r.m.free_inside, r.median_ms);
+      std::printf("%-5ld %-8s %8zu %8zu %6zu %8zu %8zu %10zu %11zu %8.3f\n", s, name, r.m.occupied,
+                  r.m.free, r.m.shell, r.m.in_shell, r.m.covered, r.m.irrelevant, r.m.free_inside,
+                  r.median_ms);
     octo_rows.push_back(o);
     knn_rows.push_back(k);
     shell += o.m.shell;
@@ -195,8 +196,8 @@ inline int run_demo(const std::vector<std::string>& argv) {
       "nodes in shell %.1f %% (goal >= 97 %%: %s)\n"
       "(paper, real data: irrelevant 4 / 33 = 12.1 %%, nodes in shell 387 / 399 = 97.0 %%)\n"
       "%zu keyframe points, %zu of them wrong stereo matches; %.2f s in all\n",
-      irr_pct, irr_pct <= 10.0 ? "met" : "NOT met", shell_pct, shell_pct >= 97.0 ? "met" : "NOT met",
-      points, outliers, seconds);
+      irr_pct, irr_pct <= 10.0 ? "met" : "NOT met", shell_pct,
+      shell_pct >= 97.0 ? "met" : "NOT met", points, outliers, seconds);
   if (!out.empty())
     std::printf("wrote %s/{octomap,knn}.voxels, %s/{octomap,knn}_occupied.ply, %s/scene/\n",
                 out.c_str(), out.c_str(), out.c_str());

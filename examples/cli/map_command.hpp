@@ -184,11 +184,11 @@ int run_map_with(const MapOptions& opt, const Model& model) {
 }
 
 inline int run_map(const std::vector<std::string>& argv) {
-  const Args args(argv,
-                  {"--input", "--res", "--model", "--max-range", "--crop", "--out-voxels",
-                   "--voxels", "--threads", "--k", "--w", "--p-upper", "--p-w", "--p-free",
-                   "--s-limit"},
-                  {"--discretize"});
+  const Args args(
+      argv,
+      {"--input", "--res", "--model", "--max-range", "--crop", "--out-voxels", "--voxels",
+       "--threads", "--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"},
+      {"--discretize"});
   if (args.help()) {
     std::fputs(map_help(), stdout);
     return 0;

@@ -57,11 +57,11 @@ struct MapperOptions {
 
 /// What one insert_keyframe() did.
 struct KeyframeStats {
-  ScanStats scan;          ///< the map update
-  TrackerUpdate tracker;   ///< the map point cloud's change (k-NN model; zero otherwise)
-  std::size_t rated = 0;   ///< endpoints rated from the tracker (k-NN model)
-  std::size_t rays = 0;    ///< of those, the reliable ones that cast a free ray (eq 14)
-  std::size_t unrated = 0; ///< endpoints without an s (fewer than k neighbours, or no id)
+  ScanStats scan;           ///< the map update
+  TrackerUpdate tracker;    ///< the map point cloud's change (k-NN model; zero otherwise)
+  std::size_t rated = 0;    ///< endpoints rated from the tracker (k-NN model)
+  std::size_t rays = 0;     ///< of those, the reliable ones that cast a free ray (eq 14)
+  std::size_t unrated = 0;  ///< endpoints without an s (fewer than k neighbours, or no id)
 };
 
 namespace detail {
@@ -85,8 +85,11 @@ class Mapper {
 
   /// Rejects resolution <= 0 and bad options (std::invalid_argument; abort without exceptions).
   explicit Mapper(double resolution, Model model = Model(), MapperOptions options = {})
-      : options_(checked(options)), map_(resolution, options.occupancy), model_(model),
-        tracker_(make_tracker(model)), caster_(map_, model, options.threads) {}
+      : options_(checked(options)),
+        map_(resolution, options.occupancy),
+        model_(model),
+        tracker_(make_tracker(model)),
+        caster_(map_, model, options.threads) {}
   Mapper(Mapper&&) = delete;  // the caster points at the map
 
   const map_type& map() const { return map_; }
@@ -196,8 +199,8 @@ class Mapper {
         ratings_[j] = EndpointRating{0.0f, true};
         continue;
       }
-      const double s = tracker_.contains(id) ? tracker_.s(id)
-                                             : std::numeric_limits<double>::quiet_NaN();
+      const double s =
+          tracker_.contains(id) ? tracker_.s(id) : std::numeric_limits<double>::quiet_NaN();
       ratings_[j] = model_.rate(s, dist);
       ++ks.rated;
       ks.unrated += std::isnan(s);

@@ -141,8 +141,10 @@ class Reference {
     lo = {inf, inf, inf};
     hi = {-inf, -inf, -inf};
     auto grow = [&](const Point3d& a, const Point3d& b) {
-      lo = {std::min(lo.x, a.x - margin), std::min(lo.y, a.y - margin), std::min(lo.z, a.z - margin)};
-      hi = {std::max(hi.x, b.x + margin), std::max(hi.y, b.y + margin), std::max(hi.z, b.z + margin)};
+      lo = {std::min(lo.x, a.x - margin), std::min(lo.y, a.y - margin),
+            std::min(lo.z, a.z - margin)};
+      hi = {std::max(hi.x, b.x + margin), std::max(hi.y, b.y + margin),
+            std::max(hi.z, b.z + margin)};
     };
     for (const Ellipsoid& e : ellipsoids)
       grow({e.centre.x - e.semi_axes.x, e.centre.y - e.semi_axes.y, e.centre.z - e.semi_axes.z},
@@ -153,7 +155,8 @@ class Reference {
 
 /// Writes the text format above (atomically).
 inline void write_reference(const std::string& path, const Reference& ref) {
-  std::string text = "# knnocc reference scene: ground z | ellipsoid centre semi-axes | cuboid lo hi\n";
+  std::string text =
+      "# knnocc reference scene: ground z | ellipsoid centre semi-axes | cuboid lo hi\n";
   char line[256];
   if (ref.has_ground) {
     std::snprintf(line, sizeof line, "ground %.9g\n", ref.ground_z);
@@ -178,41 +181,43 @@ inline void write_reference(const std::string& path, const Reference& ref) {
 inline Reference read_reference(const std::string& path) {
   const io::detail::FileBuffer buf = io::detail::read_file(path);
   Reference ref;
-  io::detail::for_each_line(buf.data(), buf.end(), [&](std::size_t n, const char* b, const char* e) {
-    const std::string at = "line " + std::to_string(n) + ": ";
-    while (b < e && (*b == ' ' || *b == '\t')) ++b;
-    const char* w = b;
-    while (w < e && *w != ' ' && *w != '\t' && *w != '#' && *w != '\r') ++w;
-    const std::string word(b, w);
-    if (word.empty()) return;  // blank or comment
-    double v[7];
-    const std::size_t got = io::detail::scan_line_numbers(path, n, w, e, v, 7, true);
-    for (std::size_t i = 0; i < got; ++i)
-      if (!std::isfinite(v[i])) throw io::Error(path, at + "non-finite number");
-    auto expect = [&](std::size_t count) {
-      if (got != count)
-        throw io::Error(path, at + "'" + word + "' expects " + std::to_string(count) +
-                                  " numbers, found " + (got > count ? "more" : std::to_string(got)));
-    };
-    if (word == "ground") {
-      expect(1);
-      if (ref.has_ground) throw io::Error(path, at + "a second ground line");
-      ref.has_ground = true;
-      ref.ground_z = v[0];
-    } else if (word == "ellipsoid") {
-      expect(6);
-      if (!(v[3] > 0 && v[4] > 0 && v[5] > 0))
-        throw io::Error(path, at + "ellipsoid semi-axes must be > 0");
-      ref.ellipsoids.push_back({{v[0], v[1], v[2]}, {v[3], v[4], v[5]}});
-    } else if (word == "cuboid") {
-      expect(6);
-      if (!(v[0] < v[3] && v[1] < v[4] && v[2] < v[5]))
-        throw io::Error(path, at + "cuboid corners must satisfy x0 < x1, y0 < y1, z0 < z1");
-      ref.cuboids.push_back({{v[0], v[1], v[2]}, {v[3], v[4], v[5]}});
-    } else {
-      throw io::Error(path, at + "unknown shape '" + word + "' (ground, ellipsoid or cuboid)");
-    }
-  });
+  io::detail::for_each_line(
+      buf.data(), buf.end(), [&](std::size_t n, const char* b, const char* e) {
+        const std::string at = "line " + std::to_string(n) + ": ";
+        while (b < e && (*b == ' ' || *b == '\t')) ++b;
+        const char* w = b;
+        while (w < e && *w != ' ' && *w != '\t' && *w != '#' && *w != '\r') ++w;
+        const std::string word(b, w);
+        if (word.empty()) return;  // blank or comment
+        double v[7];
+        const std::size_t got = io::detail::scan_line_numbers(path, n, w, e, v, 7, true);
+        for (std::size_t i = 0; i < got; ++i)
+          if (!std::isfinite(v[i])) throw io::Error(path, at + "non-finite number");
+        auto expect = [&](std::size_t count) {
+          if (got != count)
+            throw io::Error(path, at + "'" + word + "' expects " + std::to_string(count) +
+                                      " numbers, found " +
+                                      (got > count ? "more" : std::to_string(got)));
+        };
+        if (word == "ground") {
+          expect(1);
+          if (ref.has_ground) throw io::Error(path, at + "a second ground line");
+          ref.has_ground = true;
+          ref.ground_z = v[0];
+        } else if (word == "ellipsoid") {
+          expect(6);
+          if (!(v[3] > 0 && v[4] > 0 && v[5] > 0))
+            throw io::Error(path, at + "ellipsoid semi-axes must be > 0");
+          ref.ellipsoids.push_back({{v[0], v[1], v[2]}, {v[3], v[4], v[5]}});
+        } else if (word == "cuboid") {
+          expect(6);
+          if (!(v[0] < v[3] && v[1] < v[4] && v[2] < v[5]))
+            throw io::Error(path, at + "cuboid corners must satisfy x0 < x1, y0 < y1, z0 < z1");
+          ref.cuboids.push_back({{v[0], v[1], v[2]}, {v[3], v[4], v[5]}});
+        } else {
+          throw io::Error(path, at + "unknown shape '" + word + "' (ground, ellipsoid or cuboid)");
+        }
+      });
   if (ref.ellipsoids.empty() && ref.cuboids.empty())
     throw io::Error(path, "no ellipsoid or cuboid in the reference");
   return ref;

@@ -135,13 +135,14 @@ inline void write_sequence(const std::string& dir, const std::vector<Pose>& pose
     char name[32];
     std::snprintf(name, sizeof name, "%06zu.ply", i);
     const Cloud& c = *clouds[i];
-    write_ply((fs::path(dir) / "clouds" / name).string(), c.points, c.ids.empty() ? nullptr : &c.ids);
+    write_ply((fs::path(dir) / "clouds" / name).string(), c.points,
+              c.ids.empty() ? nullptr : &c.ids);
   }
   std::string text = "# stamp tx ty tz qx qy qz qw (sensor to world)\n";
   for (const Pose& p : poses) {
     char line[256];
-    std::snprintf(line, sizeof line, "%.6f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", p.stamp, p.t.x(),
-                  p.t.y(), p.t.z(), p.q.x(), p.q.y(), p.q.z(), p.q.w());
+    std::snprintf(line, sizeof line, "%.6f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", p.stamp,
+                  p.t.x(), p.t.y(), p.t.z(), p.q.x(), p.q.y(), p.q.z(), p.q.w());
     text += line;
   }
   AtomicFile out((fs::path(dir) / "poses.txt").string());

@@ -155,7 +155,8 @@ class ScanInserter {
     if (max_range == 0.0 || std::isnan(max_range))
       detail::invalid_argument("max_range must be > 0, or < 0 for no limit");
     const auto n = static_cast<std::size_t>(std::distance(std::begin(points), std::end(points)));
-    if (n != ratings.size()) detail::invalid_argument("insert_rated: one rating per point expected");
+    if (n != ratings.size())
+      detail::invalid_argument("insert_rated: one rating per point expected");
     ScanStats st;
     origin_ = to_point3f(origin);
     if (!detail::finite(origin_)) {
@@ -702,7 +703,7 @@ class ScanInserter {
         for (std::size_t i = 0; i < u.miss.w.size(); ++i) u.miss.w[i] &= ~u.hit.w[i];
       }
     const float hit_l = hit_l_, miss_l = miss_l_;
-    const bool hits_here = !rated_;  // rated hits carry their own sums: apply_rated_hits()
+    const bool hits_here = !rated_;          // rated hits carry their own sums: apply_rated_hits()
     if (map_->change_detection_enabled()) {  // records per voxel, in one thread
       for (std::size_t g = 0; g < group_count_; ++g)
         for (const BrickUpdate& u : groups_[g]) {

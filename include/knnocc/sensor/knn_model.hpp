@@ -36,16 +36,17 @@ namespace knnocc {
 
 // Defaults: the best of the documented sweep (bench/bench_knn_sweep.cpp, README "k-NN model").
 struct KnnModelParams {
-  std::size_t k = 8;        ///< neighbours per map point (s_p = mean distance to them)
-  double w = 0.0;           ///< reliability threshold: s < mu + w * sigma casts a free ray
-  double p_upper = 0.9;     ///< P_u: probability of the most reliable endpoints
-  double p_w = 0.65;        ///< P_w: probability at s = mu + w * sigma
-  double p_free = 0.4;      ///< free-ray probability (l_free = logit(p_free)); OctoMap's miss
+  std::size_t k = 8;     ///< neighbours per map point (s_p = mean distance to them)
+  double w = 0.0;        ///< reliability threshold: s < mu + w * sigma casts a free ray
+  double p_upper = 0.9;  ///< P_u: probability of the most reliable endpoints
+  double p_w = 0.65;     ///< P_w: probability at s = mu + w * sigma
+  double p_free = 0.4;   ///< free-ray probability (l_free = logit(p_free)); OctoMap's miss
   double s_limit = std::numeric_limits<double>::infinity();  ///< valid s_p < s_limit
 
   /// Rejects values the model is undefined for (std::invalid_argument; abort without exceptions).
   void validate() const {
-    if (k < 1 || k > 4096) detail::invalid_argument("k must be in [1, 4096], got " + num(double(k)));
+    if (k < 1 || k > 4096)
+      detail::invalid_argument("k must be in [1, 4096], got " + num(double(k)));
     if (!(w >= -8.0 && w <= 8.0)) detail::invalid_argument("w must be in [-8, 8], got " + num(w));
     if (!(p_w > 0.5 && p_w < 1.0))
       detail::invalid_argument("P_w must be in (0.5, 1), got " + num(p_w));

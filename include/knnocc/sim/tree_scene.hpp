@@ -35,10 +35,10 @@ namespace knnocc::sim {
 
 struct TreeSceneParams {
   std::uint64_t seed = 1;
-  std::size_t keyframes = 60;    ///< around one full circle
-  double radius = 3.5;           ///< camera circle radius (m)
-  double height = 1.3;           ///< camera height (m)
-  double focal = 700.0;          ///< px (ZED 720p)
+  std::size_t keyframes = 60;  ///< around one full circle
+  double radius = 3.5;         ///< camera circle radius (m)
+  double height = 1.3;         ///< camera height (m)
+  double focal = 700.0;        ///< px (ZED 720p)
   int width = 1280, height_px = 720;
   double baseline = 0.12;        ///< stereo baseline (m)
   double disparity_noise = 0.5;  ///< sigma_d (px)
@@ -48,10 +48,11 @@ struct TreeSceneParams {
   double foliage_density = 150;  ///< feature sites per m^2
   double pot_density = 100;
   double ground_density = 12;
-  double ground_radius = 6.0;    ///< textured ground around the tree (m)
+  double ground_radius = 6.0;  ///< textured ground around the tree (m)
 
   void validate() const {
-    if (keyframes < 1 || keyframes > 100000) detail::invalid_argument("keyframes must be in [1, 100000]");
+    if (keyframes < 1 || keyframes > 100000)
+      detail::invalid_argument("keyframes must be in [1, 100000]");
     if (!(radius > 1.5 && radius < 100)) detail::invalid_argument("radius must be in (1.5, 100) m");
     if (!(detect > 0 && detect <= 1)) detail::invalid_argument("detect must be in (0, 1]");
     if (!(outliers >= 0 && outliers < 1)) detail::invalid_argument("outliers must be in [0, 1)");
@@ -61,9 +62,9 @@ struct TreeSceneParams {
 };
 
 struct SimKeyframe {
-  io::Pose pose;              ///< camera to world (stamp = keyframe index)
-  io::Cloud cloud;            ///< camera frame, one map-point id per point
-  std::size_t outliers = 0;   ///< wrong matches among the points
+  io::Pose pose;             ///< camera to world (stamp = keyframe index)
+  io::Cloud cloud;           ///< camera frame, one map-point id per point
+  std::size_t outliers = 0;  ///< wrong matches among the points
 };
 
 class TreeScene {
@@ -94,7 +95,7 @@ class TreeScene {
   };
 
   double uniform() { return (rng_() >> 11) * 0x1.0p-53; }  // [0, 1)
-  double normal() {  // Box-Muller
+  double normal() {                                        // Box-Muller
     const double u1 = 1.0 - uniform(), u2 = uniform();
     return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
   }
@@ -102,12 +103,15 @@ class TreeScene {
 
   void make_sites() {
     const eval::Ellipsoid& e = ref_.ellipsoids[0];
-    const Eigen::Vector3d c(e.centre.x, e.centre.y, e.centre.z), a(e.semi_axes.x, e.semi_axes.y,
-                                                                    e.semi_axes.z);
+    const Eigen::Vector3d c(e.centre.x, e.centre.y, e.centre.z),
+        a(e.semi_axes.x, e.semi_axes.y, e.semi_axes.z);
     // Foliage: uniform directions mapped onto the ellipsoid, kept in proportion to the local
     // area element (rejection), then up to 5 cm inwards.
-    const double area = 4 * M_PI * std::pow((std::pow(a.x() * a.y(), 1.6) + std::pow(a.x() * a.z(), 1.6) +
-                                             std::pow(a.y() * a.z(), 1.6)) / 3, 1 / 1.6);
+    const double area = 4 * M_PI *
+                        std::pow((std::pow(a.x() * a.y(), 1.6) + std::pow(a.x() * a.z(), 1.6) +
+                                  std::pow(a.y() * a.z(), 1.6)) /
+                                     3,
+                                 1 / 1.6);
     const std::size_t foliage = rounded(area * p_.foliage_density);
     while (sites_.size() < foliage) {
       Eigen::Vector3d u(normal(), normal(), normal());
@@ -127,7 +131,8 @@ class TreeScene {
       int axis;
       bool high;
     };
-    for (const Face f : {Face{0, false}, Face{0, true}, Face{1, false}, Face{1, true}, Face{2, true}}) {
+    for (const Face f :
+         {Face{0, false}, Face{0, true}, Face{1, false}, Face{1, true}, Face{2, true}}) {
       const int u = (f.axis + 1) % 3, v = (f.axis + 2) % 3;
       const std::size_t n = rounded(size[u] * size[v] * p_.pot_density);
       for (std::size_t i = 0; i < n; ++i) {
@@ -141,7 +146,8 @@ class TreeScene {
       }
     }
     // Ground: a disc around the tree, outside the pot.
-    const std::size_t ground = rounded(M_PI * p_.ground_radius * p_.ground_radius * p_.ground_density);
+    const std::size_t ground =
+        rounded(M_PI * p_.ground_radius * p_.ground_radius * p_.ground_density);
     for (std::size_t i = 0; i < ground; ++i) {
       const double r = p_.ground_radius * std::sqrt(uniform()), phi = 2 * M_PI * uniform();
       const Eigen::Vector3d p(r * std::cos(phi), r * std::sin(phi), 0.0);
@@ -154,10 +160,11 @@ class TreeScene {
   // Does the segment from o to just before p cross a solid?
   bool occluded(const Eigen::Vector3d& o, const Eigen::Vector3d& p) const {
     const Eigen::Vector3d d = p - o;
-    const double stop = 1.0 - 0.08 / d.norm();  // sites lie up to 5 cm inside the foliage
+    const double stop = 1.0 - 0.08 / d.norm();          // sites lie up to 5 cm inside the foliage
     for (const eval::Ellipsoid& e : ref_.ellipsoids) {  // |(o + t d - c) / a|^2 = 1
       const Eigen::Vector3d a(e.semi_axes.x, e.semi_axes.y, e.semi_axes.z);
-      const Eigen::Vector3d oc = (o - Eigen::Vector3d(e.centre.x, e.centre.y, e.centre.z)).cwiseQuotient(a);
+      const Eigen::Vector3d oc =
+          (o - Eigen::Vector3d(e.centre.x, e.centre.y, e.centre.z)).cwiseQuotient(a);
       const Eigen::Vector3d dd = d.cwiseQuotient(a);
       const double A = dd.squaredNorm(), B = 2 * oc.dot(dd), C = oc.squaredNorm() - 1;
       const double disc = B * B - 4 * A * C;
@@ -262,7 +269,8 @@ std::vector<double> map_keyframes(MapperT& mapper, const std::vector<SimKeyframe
     io::keyframe_to_world(kf.pose, kf.cloud, crop, world, ids);
     const auto a = std::chrono::steady_clock::now();
     mapper.insert_keyframe(kf.pose.t, world, ids);
-    us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - a).count());
+    us.push_back(
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - a).count());
   }
   return us;
 }

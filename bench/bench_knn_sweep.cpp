@@ -114,6 +114,18 @@ int main(int argc, char** argv) {
                 r.p.p_upper, r.p.p_w, 100 * r.t.irrelevant / octo.irrelevant,
                 100 * r.t.in_shell / octo.in_shell, 100 * r.t.free_inside / octo.free_inside);
   }
+  std::size_t both = 0;
+  for (const Result& r : results)
+    both += r.t.in_shell >= 0.97 * octo.in_shell && r.t.irrelevant <= 0.10 * octo.irrelevant;
+  std::printf("\n%zu of %zu combinations meet both goals (irrelevant <= 10 %%, in shell >= 97 %%)\n",
+              both, combos);
+  std::printf("the least favourable ones (most irrelevant nodes):\n");
+  for (std::size_t i = results.size() > 5 ? results.size() - 5 : 0; i < results.size(); ++i) {
+    const Result& r = results[i];
+    std::printf("%4zu %8g %6g %6g %6g %12.1f %12.1f %12.1f\n", r.p.k, r.p.s_limit, r.p.w,
+                r.p.p_upper, r.p.p_w, 100 * r.t.irrelevant / octo.irrelevant,
+                100 * r.t.in_shell / octo.in_shell, 100 * r.t.free_inside / octo.free_inside);
+  }
   std::printf("\n%.1f s\n", bench::now() - t0);
   return 0;
 }

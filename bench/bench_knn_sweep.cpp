@@ -117,8 +117,9 @@ int main(int argc, char** argv) {
   std::size_t both = 0;
   for (const Result& r : results)
     both += r.t.in_shell >= 0.97 * octo.in_shell && r.t.irrelevant <= 0.10 * octo.irrelevant;
-  std::printf("\n%zu of %zu combinations meet both goals (irrelevant <= 10 %%, in shell >= 97 %%)\n",
-              both, combos);
+  std::printf(
+      "\n%zu of %zu combinations meet both goals (irrelevant <= 10 %%, in shell >= 97 %%)\n", both,
+      combos);
   std::printf("the least favourable ones (most irrelevant nodes):\n");
   for (std::size_t i = results.size() > 5 ? results.size() - 5 : 0; i < results.size(); ++i) {
     const Result& r = results[i];

@@ -15,7 +15,46 @@
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
+#include "../core/config.hpp"
+#if !KNNOCC_HAS_EXCEPTIONS
+// Built with -fno-exceptions: nanoflann's few `throw`s (index misuse, allocation failure) become
+// abort(). GCC rejects a throw expression even in code that is never called, so `throw` is
+// redefined for nanoflann's text only: every standard header it (1.4.3 or 1.5+) includes is
+// included first, unaffected.
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cassert>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <functional>
+#include <future>
+#include <istream>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <new>
+#include <ostream>
+#include <stdexcept>
+#include <thread>
+#include <type_traits>
+#include <unordered_set>
+#include <utility>
+#include <vector>
+#if defined(__clang__)
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Wkeyword-macro"
+#endif
+#define throw std::abort(),
 #include <nanoflann.hpp>
+#undef throw
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#endif
+#else
+#include <nanoflann.hpp>
+#endif
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
 #endif

@@ -10,6 +10,7 @@ if(NOT _rc EQUAL 0)
 endif()
 execute_process(COMMAND "${CMAKE_COMMAND}" --build "${WORK_DIR}" -j2
     --target knnocc_tests knnocc_tool example_insert_point_cloud example_custom_point_type
+            example_knn_mapping knnocc_noexcept_smoke
   RESULT_VARIABLE _rc)
 if(NOT _rc EQUAL 0)
   message(FATAL_ERROR "building with ${CLANGXX} -Werror failed")

@@ -150,7 +150,7 @@ int run_map_with(const MapOptions& opt, const Model& model) {
   if (total.out_of_range)
     std::fprintf(stderr,
                  "knnocc map: %s: skipped %zu points outside the map's key range (|c| >= %g m at "
-                 "--res %g); use a coarser --res\n",
+                 "--res %g); use a coarser --res (the library's WideKey maps reach 64x farther)\n",
                  opt.input.c_str(), total.out_of_range, map.grid().max_coord(), opt.res);
 
   if (!opt.out_voxels.empty()) {

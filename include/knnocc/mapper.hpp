@@ -21,7 +21,8 @@
 //                 s_{p,t} (eq 13, 14) and the scan applied with per-voxel sums (eq 15, Alg. 3).
 // max_range keeps OctoMap's meaning for both models: a point farther than max_range from the
 // sensor marks nothing occupied, casts its ray truncated at max_range, and (k-NN model) stays out
-// of the map point cloud.
+// of the map point cloud. Points with a NaN/Inf coordinate or outside the key range are skipped
+// and counted (ScanStats) and stay out of the map cloud too.
 //
 // Thread safety: one writer; const queries (map(), tracker()) are safe from many threads while no
 // insert runs.
@@ -178,13 +179,15 @@ class Mapper {
     for (const auto& p : points) world_.push_back(to_point3d(p));
   }
 
-  // The caster's max-range test (OctoMap's float norm), so the map cloud holds exactly the
-  // points that make an occupied update.
+  // The caster's tests (OctoMap's float norm against max_range, the key range), so the map
+  // cloud holds exactly the points that make an occupied update.
   bool within_range(std::size_t j) const {
     const Point3d& p = world_[j];
     if (!is_finite(p)) return false;
+    const auto f = [](double v) { return detail::to_float(v); };
+    Key k;
+    if (!map_.grid().point_to_key(Point3f{f(p.x), f(p.y), f(p.z)}, k)) return false;
     if (options_.max_range < 0.0) return true;
-    const auto f = [](double v) { return static_cast<float>(v); };
     return detail::octomap_norm(f(p.x) - f(origin_.x), f(p.y) - f(origin_.y),
                                 f(p.z) - f(origin_.z)) <= options_.max_range;
   }

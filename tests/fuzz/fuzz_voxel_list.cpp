@@ -4,8 +4,7 @@
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  knnocc::fuzz::read_rejecting_cleanly(data, size, ".txt", [](const std::string& p) {
-    knnocc::io::read_voxel_list(p);
-  });
+  knnocc::fuzz::read_rejecting_cleanly(
+      data, size, ".txt", [](const std::string& p) { knnocc::io::read_voxel_list(p); });
   return 0;
 }

@@ -24,11 +24,18 @@ class Grid {
   using index_type = typename Key::index_type;
   static constexpr int depth = Key::depth;
 
-  /// resolution: voxel edge in metres; must be finite and > 0.
+  /// Smallest accepted resolution (1 micrometre): below it a map could not even hold a sensor's
+  /// own noise, so a smaller value is taken for a unit mistake.
+  static constexpr double min_resolution = 1e-6;
+
+  /// resolution: voxel edge in metres; finite and >= min_resolution.
   explicit Grid(double resolution) : res_(resolution), inv_res_(1.0 / resolution) {
     if (!(resolution > 0.0) || !std::isfinite(resolution) || !std::isfinite(inv_res_))
       detail::invalid_argument("resolution must be a finite number > 0, got " +
                                std::to_string(resolution));
+    if (resolution < min_resolution)
+      detail::invalid_argument("resolution " + std::to_string(resolution) +
+                               " m is below the minimum of 1e-6 m (a unit mistake?)");
   }
 
   double resolution() const { return res_; }

@@ -9,8 +9,11 @@
 //   using scalar = float|double;  static scalar x(const P&), y(const P&), z(const P&);
 
 #include <array>
+#include <limits>
 #include <type_traits>
 #include <utility>
+
+#include "point3.hpp"
 
 namespace knnocc {
 
@@ -119,5 +122,29 @@ auto point_z(const P& p) {
 /// The scalar type of a point's coordinates (float for Eigen::Vector3f, double for Vector3d, ...).
 template <class P>
 using point_scalar_t = std::decay_t<decltype(point_x(std::declval<const P&>()))>;
+
+namespace detail {
+
+/// A coordinate as float: floats as they are; wider values rounded, and beyond float's range
+/// +-inf instead of the undefined behaviour of a plain cast (NaN stays NaN).
+template <class T>
+inline float to_float(T v) noexcept {
+  if constexpr (std::is_same_v<T, float> || !std::is_floating_point_v<T>) {
+    return static_cast<float>(v);
+  } else {
+    constexpr T max = static_cast<T>(std::numeric_limits<float>::max());
+    if (v > max) return std::numeric_limits<float>::infinity();
+    if (v < -max) return -std::numeric_limits<float>::infinity();
+    return static_cast<float>(v);
+  }
+}
+
+/// Any point type as a Point3f (to_float per coordinate).
+template <class P>
+inline Point3f to_point3f(const P& p) noexcept {
+  return Point3f{to_float(point_x(p)), to_float(point_y(p)), to_float(point_z(p))};
+}
+
+}  // namespace detail
 
 }  // namespace knnocc

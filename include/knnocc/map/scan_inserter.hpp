@@ -128,8 +128,7 @@ class ScanInserter {
     if (max_range == 0.0 || std::isnan(max_range))
       detail::invalid_argument("max_range must be > 0, or < 0 for no limit");
     ScanStats st;
-    origin_ = Point3f{static_cast<float>(point_x(origin)), static_cast<float>(point_y(origin)),
-                      static_cast<float>(point_z(origin))};
+    origin_ = to_point3f(origin);
     if (!detail::finite(origin_)) {
       st.origin_valid = false;
       for (const auto& p : points) (void)p, ++st.points;
@@ -240,8 +239,7 @@ class ScanInserter {
 
   template <class P>
   static Point3f to_point3f(const P& p) {
-    return Point3f{static_cast<float>(point_x(p)), static_cast<float>(point_y(p)),
-                   static_cast<float>(point_z(p))};
+    return detail::to_point3f(p);
   }
 
   // ---- 1. collect -----------------------------------------------------------------------

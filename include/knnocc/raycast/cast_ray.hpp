@@ -61,7 +61,7 @@ CastResult<Key> cast_ray(const OccupancyMap<Key>& map, const Point3f& origin,
   }
   const double len = detail::octomap_norm(dir[0], dir[1], dir[2]);
   if (len > 0)
-    for (float& d : dir) d /= static_cast<float>(len);
+    for (float& d : dir) d /= detail::to_float(len);
   const float o[3] = {origin.x, origin.y, origin.z};
   const double res = grid.resolution();
   int step[3];

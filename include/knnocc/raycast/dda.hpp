@@ -48,12 +48,12 @@ inline Point3f truncate_ray(const Point3f& origin, const Point3f& end, double ma
   float dx = end.x - origin.x, dy = end.y - origin.y, dz = end.z - origin.z;
   const double len = detail::octomap_norm(dx, dy, dz);
   if (len > 0) {
-    const auto l = static_cast<float>(len);
+    const float l = detail::to_float(len);  // a norm past float's range saturates to inf
     dx /= l;
     dy /= l;
     dz /= l;
   }
-  const auto m = static_cast<float>(max_range);
+  const float m = detail::to_float(max_range);
   const float sx = dx * m, sy = dy * m, sz = dz * m;  // separate products: no fused multiply-add
   return Point3f{origin.x + sx, origin.y + sy, origin.z + sz};
 }

@@ -20,6 +20,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "../../core/point_traits.hpp"
 #include "../atomic_file.hpp"
 #include "../error.hpp"
 
@@ -86,15 +87,7 @@ inline std::string quote_token(const char* p, const char* end) {
 }
 
 // Double -> float without the undefined behaviour of an out-of-range conversion.
-inline float to_float(double d) noexcept {
-  if (d > static_cast<double>(std::numeric_limits<float>::max())) {
-    return std::numeric_limits<float>::infinity();
-  }
-  if (d < -static_cast<double>(std::numeric_limits<float>::max())) {
-    return -std::numeric_limits<float>::infinity();
-  }
-  return static_cast<float>(d);
-}
+inline float to_float(double d) noexcept { return knnocc::detail::to_float(d); }
 
 // Parses the whole token [p, e) as a float or double; false if it is not exactly one number.
 // nan/inf are accepted (callers decide what non-finite means). The buffer must hold a '\0' at or

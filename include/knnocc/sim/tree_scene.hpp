@@ -82,12 +82,17 @@ class TreeScene {
   const eval::Reference& reference() const { return ref_; }
   const TreeSceneParams& params() const { return p_; }
 
-  /// The whole sequence, keyframe by keyframe around the circle.
+  /// One circle of params().keyframes keyframes, from where the camera is (the start, for a new
+  /// scene).
   std::vector<SimKeyframe> keyframes() {
     std::vector<SimKeyframe> out;
-    for (std::size_t i = 0; i < p_.keyframes; ++i) out.push_back(keyframe(i));
+    for (std::size_t i = 0; i < p_.keyframes; ++i) out.push_back(next());
     return out;
   }
+
+  /// The next keyframe; the camera keeps circling (params().keyframes per circle), observing the
+  /// same map points, so long runs stay in one bounded scene.
+  SimKeyframe next() { return keyframe(count_++); }
 
  private:
   struct Site {
@@ -254,6 +259,7 @@ class TreeScene {
   std::vector<Site> sites_;
   std::vector<Eigen::Vector3d> map_points_;  // NaN until first observed
   std::uint64_t next_outlier_ = 0;
+  std::size_t count_ = 0;  // keyframes made so far
 };
 
 /// Feeds keyframes (camera-frame clouds with poses) to a Mapper the way `knnocc map` does with a

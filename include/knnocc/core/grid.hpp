@@ -6,6 +6,8 @@
 //   centre(k) = (double(k - center) + 0.5) * r
 // A coordinate is in range when its key fits the key type; conversions say so instead of
 // wrapping around.
+//
+// Thread safety: immutable after construction.
 
 #include <cmath>
 #include <cstdint>

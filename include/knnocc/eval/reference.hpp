@@ -7,6 +7,8 @@
 //   ground Z                      the ground plane z = Z (at most one line)
 //   ellipsoid CX CY CZ AX AY AZ   centre and semi-axes (> 0)
 //   cuboid X0 Y0 Z0 X1 Y1 Z1      opposite corners, X0 < X1, Y0 < Y1, Z0 < Z1
+//
+// Thread safety: const queries (relation, distance, evaluate) may run concurrently.
 
 #include <algorithm>
 #include <cmath>

@@ -28,6 +28,9 @@
 //      thread).
 // The scratch is kept between scans, so a warmed-up inserter allocates nothing per scan.
 //
+// Thread safety: an inserter is one writer (of its map); use one per thread, on different maps.
+// With threads > 1 it runs its own workers inside each call and returns when they are done.
+//
 // insert_rated() is the same scan with a per-endpoint sensor model (KnnModel, eq 13-15): each
 // endpoint brings its own occupied log-odds and its own "casts a free ray" decision; a voxel
 // holding endpoints receives the sum of their log-odds (eq 15) and no free update (occupied wins),

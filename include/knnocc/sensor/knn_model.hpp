@@ -20,6 +20,8 @@
 //     s -> +inf;
 //   - N == 0 (no valid point yet): no distribution, every endpoint gets exactly P_w: weak occupied
 //     evidence and no free ray.
+//
+// Thread safety: immutable after construction; share it freely.
 
 #include <cmath>
 #include <cstddef>

@@ -14,6 +14,8 @@
 // Keyframe clouds are in the camera frame (x right, y down, z forward) with camera-to-world
 // poses, like ../shared/data/orbslam2_stereo_keyframes. Deterministic for a seed on every
 // platform (own uniform and normal variates on std::mt19937_64).
+//
+// Thread safety: a TreeScene is one generator (next() advances it); use one per thread.
 
 #include <chrono>
 #include <cmath>

@@ -12,6 +12,8 @@
 // Erasing a value that was never added corrupts the state; callers (the tracker) only erase
 // values they added. Long add/erase runs accumulate rounding; KnnTracker bounds it with an exact
 // refresh (see knn/tracker.hpp).
+//
+// Thread safety: a plain value; const functions may run concurrently, writes need exclusivity.
 
 #include <cmath>
 #include <cstddef>

@@ -1,4 +1,5 @@
-// A warmed-up ScanInserter allocates nothing: counted with a replaced global operator new.
+// A warmed-up ScanInserter allocates nothing: counted with a replaced global operator new
+// (which also records the largest single allocation for the IO tests).
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -14,15 +15,33 @@
 
 namespace {
 std::atomic<std::size_t> g_allocations{0};
-}
+std::atomic<std::size_t> g_largest{0};
+}  // namespace
+
+namespace knnocc::test {
+// Declared in test_support.hpp: lets the IO tests check that a lying header is never believed.
+std::size_t largest_allocation() { return g_largest.load(); }
+void reset_largest_allocation() { g_largest.store(0); }
+}  // namespace knnocc::test
 
 void* operator new(std::size_t n) {
   ++g_allocations;
+  // Racy max (another thread may store a smaller value in between): exact for the
+  // single-threaded IO tests that read it.
+  if (n > g_largest.load(std::memory_order_relaxed)) g_largest.store(n, std::memory_order_relaxed);
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
+// GCC 12 flags free() after an operator new it no longer inlines; the pairing is deliberate.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#endif
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
 
 TEST_CASE("insert.no_allocation_once_warmed_up") {
   knnocc::test::Rng rng(17);

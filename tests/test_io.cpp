@@ -636,8 +636,8 @@ TEST_CASE("io.read_points dispatches on the extension") {
   std::string msg = error_of([&] { io::read_points(bz); });
   CHECK(contains(msg, bz));
   CHECK(contains(msg, "compressed input: decompress first, e.g. bzip2 -dk FILE"));
-  msg = error_of([&] { io::read_points(dir.file("cloud.pcd")); });
-  CHECK(contains(msg, "unknown point-file extension '.pcd'"));
+  msg = error_of([&] { io::read_points(dir.file("cloud.las")); });
+  CHECK(contains(msg, "unknown point-file extension '.las'"));
   CHECK(contains(error_of([&] { io::read_points(dir.file("noext")); }),
                  "unknown point-file extension"));
 }

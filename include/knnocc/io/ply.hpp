@@ -119,19 +119,6 @@ struct PlyHeader {
   std::size_t line_count = 0;   // header lines, so ascii errors can report file line numbers
 };
 
-inline std::vector<std::string> split_words(const char* p, const char* end) {
-  std::vector<std::string> words;
-  while (true) {
-    while (p != end && is_blank(*p)) ++p;
-    if (p == end) break;
-    const char* e = p;
-    while (e != end && !is_blank(*e)) ++e;
-    words.emplace_back(p, e);
-    p = e;
-  }
-  return words;
-}
-
 inline PlyHeader parse_ply_header(const std::string& path, const char* data, std::size_t size) {
   PlyHeader h;
   bool have_format = false;

@@ -12,7 +12,9 @@
 #include <knnocc/version.hpp>
 
 #include "args.hpp"
+#include "convert_command.hpp"
 #include "demo_command.hpp"
+#include "info_command.hpp"
 #include "map_command.hpp"
 #include "track_command.hpp"
 
@@ -22,8 +24,10 @@ const char* kUsage = R"(usage: knnocc <command> [options]     (knnocc <command> 
 
 commands:
   demo     the embedded default job: simulated LiDAR scans of a room through the OctoMap model
-  map      build an occupancy map from a sequence folder or a point file
+  map      build an occupancy map from a sequence folder, a .graph file or a point file
   track    follow s_p and its normal distribution over a keyframe sequence (k-NN tracker)
+  info     what a map (.bt/.ot), cloud, scan graph or sequence folder holds
+  convert  maps and clouds between formats (.bt .ot .ply .pcd .xyz .bin .png, voxel lists)
   version  print the version
 )";
 
@@ -40,6 +44,8 @@ int main(int argc, char** argv) {
     if (command == "map") return knnocc::cli::run_map(args);
     if (command == "demo") return knnocc::cli::run_demo(args);
     if (command == "track") return knnocc::cli::run_track(args);
+    if (command == "info") return knnocc::cli::run_info(args);
+    if (command == "convert") return knnocc::cli::run_convert(args);
     if (command == "version" || command == "--version") {
       std::printf("knnocc %s\n", KNNOCC_VERSION_STRING);
       return 0;

@@ -1,5 +1,5 @@
 #pragma once
-// knnocc map: build an occupancy map from a sequence folder or a single point file.
+// knnocc map: build an occupancy map from a sequence folder, a .graph file or a point file.
 
 #include <chrono>
 #include <cmath>
@@ -7,27 +7,31 @@
 #include <string>
 #include <vector>
 
-#include <knnocc/io/point_file.hpp>
-#include <knnocc/io/sequence.hpp>
+#include <knnocc/io/scan_source.hpp>
 #include <knnocc/io/voxel_list.hpp>
 #include <knnocc/map/scan_inserter.hpp>
 
 #include "args.hpp"
+#include "map_outputs.hpp"
 #include "progress.hpp"
 
 namespace knnocc::cli {
 
-inline const char* map_help() {
-  return R"(usage: knnocc map --input PATH --res R [options]
+inline std::string map_help() {
+  return std::string(R"(usage: knnocc map --input PATH --res R [options]
 
 Builds an occupancy map and prints one summary line:
   clouds N points N occupied N free N seconds S
 (occupied/free: finest-level voxels in the map; points: points inserted, after --crop).
 
 input (--input PATH):
-  a sequence folder     poses.txt (stamp tx ty tz qx qy qz qw, sensor to world) and
-                        clouds/NNNNNN.ply (points in the sensor frame, cloud i <-> pose line i)
-  a point file          .ply, or ASCII .xyz/.dat/.txt (x y z per line); sensor at the origin
+  a sequence folder     poses.txt (sensor to world; TUM "stamp tx ty tz qx qy qz qw" or KITTI
+                        3x4 "r11 r12 r13 tx r21 ... tz" lines) and clouds/NNNNNN.{ply,pcd,bin,xyz}
+                        (points in the sensor frame, cloud i <-> pose line i); a KITTI
+                        sequence: velodyne/*.bin + poses.txt + calib.txt (its Tr is applied)
+  an OctoMap .graph     scans with their poses (OctoMap's ScanGraph)
+  a point file          .ply, .pcd (VIEWPOINT = sensor pose), KITTI .bin, or ASCII
+                        .xyz/.dat/.txt (x y z per line); sensor at the origin
 options:
   --res R               voxel edge in metres (required, > 0)
   --model octomap       inverse sensor model (default octomap: hit 0.7, miss 0.4,
@@ -40,7 +44,8 @@ options:
   --out-voxels FILE     write `x y z logodds` per finest voxel (centre, world frame, %.6f),
                         sorted by x, y, z; written to a temporary file, then renamed
   --voxels WHICH        which voxels --out-voxels writes: occupied, free or all (default)
-  --threads N           threads that walk the rays of each cloud (default 1); the map is the
+)") + map_outputs_help() +
+         R"(  --threads N           threads that walk the rays of each cloud (default 1); the map is the
                         same for every N
 exit status: 0 success, 2 bad input (one line on stderr naming the file and the problem).
 )";
@@ -48,13 +53,14 @@ exit status: 0 success, 2 bad input (one line on stderr naming the file and the 
 
 inline int run_map(const std::vector<std::string>& argv) {
   const Args args(argv,
-                  {"--input", "--res", "--model", "--max-range", "--crop", "--out-voxels",
-                   "--voxels", "--threads"},
-                  {"--discretize"});
+                  with_map_outputs({"--input", "--res", "--model", "--max-range", "--crop",
+                                    "--out-voxels", "--voxels", "--threads"}),
+                  with_map_output_flags({"--discretize"}));
   if (args.help()) {
-    std::fputs(map_help(), stdout);
+    std::fputs(map_help().c_str(), stdout);
     return 0;
   }
+  check_map_outputs(args);
   const std::string input = args.required("--input");
   if (!args.has("--res")) throw UsageError("--res is required (see --help)");
   const double res = args.number("--res", 0.0);
@@ -102,22 +108,19 @@ inline int run_map(const std::vector<std::string>& argv) {
     ++clouds;
   };
 
-  if (io::is_sequence_dir(input)) {
-    const auto seq = io::Sequence::open(input);
-    Progress progress("map", seq.size());
-    for (std::size_t i = 0; i < seq.size(); ++i) {
-      io::Cloud cloud = seq.load_cloud(i);
-      const auto& t = seq.pose(i).t;
-      apply_crop(cloud.points);
-      io::transform_to_world(seq.pose(i), cloud.points, world);
-      add(inserter.insert_point_cloud(Point3f{float(t.x()), float(t.y()), float(t.z())}, world,
-                                      max_range, discretize));
-      progress.update(i + 1);
-    }
-  } else {
-    io::Cloud cloud = io::read_points(input);
-    apply_crop(cloud.points);
-    add(inserter.insert_point_cloud(Point3f{}, cloud.points, max_range, discretize));
+  const io::ScanSource source = io::ScanSource::open(input);
+  Progress progress("map", source.size());
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    io::Scan scan = source.load(i);
+    const auto& t = scan.pose.t;
+    apply_crop(scan.cloud.points);
+    if (io::is_identity(scan.pose))
+      world.swap(scan.cloud.points);
+    else
+      io::transform_to_world(scan.pose, scan.cloud.points, world);
+    add(inserter.insert_point_cloud(Point3f{float(t.x()), float(t.y()), float(t.z())}, world,
+                                    max_range, discretize));
+    progress.update(i + 1);
   }
 
   if (total.nonfinite)
@@ -141,6 +144,7 @@ inline int run_map(const std::vector<std::string>& argv) {
     });
     io::write_voxel_list(args.str("--out-voxels"), std::move(out));
   }
+  write_map_outputs(map, args);
 
   const auto counts = map.count_voxels();
   const double seconds =

@@ -57,6 +57,7 @@ struct OctreeInfo {
   std::uint64_t occupied_leaves = 0, free_leaves = 0;
   std::uint64_t occupied_voxels = 0, free_voxels = 0;  ///< finest-level voxels the leaves cover
   int min_leaf_depth = 0, max_leaf_depth = 0;          ///< 0 when there are no leaves
+  double min[3] = {0, 0, 0}, max[3] = {0, 0, 0};       ///< box of the leaves (metres)
 };
 
 namespace detail {
@@ -309,8 +310,13 @@ inline OctreeInfo inspect_octree(const std::string& path, const OccupancyParams&
   const detail::OctreeHeader h = detail::parse_octree_header(path, buf.data(), buf.size());
   OctreeInfo info;
   info.min_leaf_depth = detail::kOctreeDepth + 1;
+  std::uint32_t lo[3] = {~0u, ~0u, ~0u}, hi[3] = {0, 0, 0};  // key box, hi exclusive
   detail::walk_octree_file(
-      path, buf, h, [&](int d, const detail::NodeCorner&, float v, bool occupied_code) {
+      path, buf, h, [&](int d, const detail::NodeCorner& c, float v, bool occupied_code) {
+        for (int a = 0; a < 3; ++a) {
+          lo[a] = std::min(lo[a], c.k[a]);
+          hi[a] = std::max(hi[a], c.k[a] + (std::uint32_t{1} << (detail::kOctreeDepth - d)));
+        }
         const bool occ = h.binary ? occupied_code : v >= params.occupancy_threshold;
         (occ ? info.occupied_leaves : info.free_leaves) += 1;
         (occ ? info.occupied_voxels : info.free_voxels) += detail::voxels_in_node(d);
@@ -321,7 +327,14 @@ inline OctreeInfo inspect_octree(const std::string& path, const OccupancyParams&
   info.id = h.id;
   info.resolution = h.resolution;
   info.nodes = h.size;
-  if (info.occupied_leaves + info.free_leaves == 0) info.min_leaf_depth = 0;
+  if (info.occupied_leaves + info.free_leaves == 0) {
+    info.min_leaf_depth = 0;
+    return info;
+  }
+  for (int a = 0; a < 3; ++a) {
+    info.min[a] = (static_cast<double>(lo[a]) - 32768.0) * h.resolution;
+    info.max[a] = (static_cast<double>(hi[a]) - 32768.0) * h.resolution;
+  }
   return info;
 }
 

@@ -57,6 +57,8 @@ class ScanSource {
     return 1;
   }
   const std::string& path() const { return path_; }
+  /// The whole graph when the source is a .graph file, else null.
+  const ScanGraph* graph() const { return graph_.get(); }
   /// "sequence folder", "scan graph" or "point file".
   const char* kind() const {
     return sequence_ ? "sequence folder" : graph_ ? "scan graph" : "point file";

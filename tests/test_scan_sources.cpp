@@ -293,6 +293,7 @@ TEST_CASE("sequence folders with .pcd and KITTI velodyne clouds; ScanSource") {
   io::write_pcd((root / "clouds" / "000000.pcd").string(), {{1, 2, 3}}, nullptr,
                 io::PcdData::binary_compressed);
   io::write_ply((root / "clouds" / "000001.ply").string(), {{4, 5, 6}, {7, 8, 9}});
+  spit(root / "calib.txt", "fx 525 fy 525\n");  // not KITTI's: only velodyne/ folders use it
   const io::ScanSource src = io::ScanSource::open(root.string());
   CHECK(std::string(src.kind()) == "sequence folder");
   REQUIRE(src.size() == 2);

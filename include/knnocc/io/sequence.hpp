@@ -4,8 +4,9 @@
 //   clouds/NNNNNN.{ply,pcd,bin,xyz}   any point file read_points() knows, or
 //   velodyne/NNNNNN.bin               a KITTI odometry sequence (with poses.txt copied or linked
 //                                     from KITTI's poses/NN.txt).
-// When the folder holds a KITTI calib.txt with a "Tr:" line, pose(i) is poses.txt's pose times
-// Tr (KITTI's poses are the camera's, its scans the Velodyne's). Clouds are in the sensor frame;
+// In a velodyne/ sequence with a KITTI calib.txt, pose(i) is poses.txt's pose times calib.txt's
+// "Tr" (KITTI's poses are the left camera's, its scans the Velodyne's). PCD viewpoints inside a
+// sequence folder are ignored: poses.txt places the clouds. Clouds are in the sensor frame;
 // use transform_to_world(pose(i), ...) to move them.
 
 #include <algorithm>
@@ -57,7 +58,7 @@ class Sequence {
     seq.dir_ = dir;
     seq.poses_ = read_trajectory(poses_file.string());
     const fs::path calib = root / "calib.txt";
-    if (fs::is_regular_file(calib, ec)) {
+    if (cloud_dir.filename() == "velodyne" && fs::is_regular_file(calib, ec)) {
       const Eigen::Isometry3d tr = read_kitti_calib_tr(calib.string());
       for (Pose& p : seq.poses_) {
         p.t = p.q * tr.translation() + p.t;

@@ -1,4 +1,5 @@
-// A warmed-up ScanInserter allocates nothing: counted with a replaced global operator new.
+// A warmed-up ScanInserter allocates nothing: counted with a replaced global operator new
+// (which also records the largest single allocation for the IO tests).
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -14,7 +15,14 @@
 
 namespace {
 std::atomic<std::size_t> g_allocations{0};
-}
+std::atomic<std::size_t> g_largest{0};
+}  // namespace
+
+namespace knnocc::test {
+// Declared in test_support.hpp: lets the IO tests check that a lying header is never believed.
+std::size_t largest_allocation() { return g_largest.load(); }
+void reset_largest_allocation() { g_largest.store(0); }
+}  // namespace knnocc::test
 
 // Not inlined: GCC 12 would otherwise pair the inlined malloc of one with the free of the other
 // (-Wmismatched-new-delete) wherever a container's new and delete meet in one function.
@@ -26,6 +34,9 @@ std::atomic<std::size_t> g_allocations{0};
 
 KNNOCC_TEST_NOINLINE void* operator new(std::size_t n) {
   ++g_allocations;
+  // Racy max (another thread may store a smaller value in between): exact for the
+  // single-threaded IO tests that read it.
+  if (n > g_largest.load(std::memory_order_relaxed)) g_largest.store(n, std::memory_order_relaxed);
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }

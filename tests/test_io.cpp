@@ -605,11 +605,11 @@ TEST_CASE("io.sequence folder") {
   io::write_ply((root / "clouds" / "000003.ply").string(), {Point3f{0, 0, 0}});
   std::string msg = open_error(root);
   CHECK(contains(msg, root.string()));
-  CHECK(contains(msg, "poses.txt has 3 poses but clouds/ has 4 .ply files"));
+  CHECK(contains(msg, "poses.txt has 3 poses but clouds/ has 4 clouds"));
 
   // No clouds.
   for (int i = 0; i < 4; ++i) fs::remove(root / "clouds" / ("00000" + std::to_string(i) + ".ply"));
-  CHECK(contains(open_error(root), "no .ply clouds"));
+  CHECK(contains(open_error(root), "no .ply, .pcd, .bin or .xyz clouds"));
 
   fs::remove(root / "poses.txt");
   msg = open_error(root);
@@ -636,8 +636,8 @@ TEST_CASE("io.read_points dispatches on the extension") {
   std::string msg = error_of([&] { io::read_points(bz); });
   CHECK(contains(msg, bz));
   CHECK(contains(msg, "compressed input: decompress first, e.g. bzip2 -dk FILE"));
-  msg = error_of([&] { io::read_points(dir.file("cloud.pcd")); });
-  CHECK(contains(msg, "unknown point-file extension '.pcd'"));
+  msg = error_of([&] { io::read_points(dir.file("cloud.las")); });
+  CHECK(contains(msg, "unknown point-file extension '.las'"));
   CHECK(contains(error_of([&] { io::read_points(dir.file("noext")); }),
                  "unknown point-file extension"));
 }

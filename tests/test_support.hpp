@@ -49,4 +49,9 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
 
 using Rng = std::mt19937_64;
 
+/// Largest single operator-new request since the last reset (tests/test_alloc.cpp replaces the
+/// global operator new of the test executable).
+std::size_t largest_allocation();
+void reset_largest_allocation();
+
 }  // namespace knnocc::test

@@ -1,6 +1,7 @@
 #pragma once
-// A small command-line parser for the knnocc tool: --name value pairs and --flags, with
-// one-line errors (UsageError) for unknown options, missing values and malformed numbers.
+// A small command-line parser for the knnocc tool: --name value pairs, --flags and (for commands
+// that take them) positional arguments, with one-line errors (UsageError) for unknown options,
+// missing values and malformed numbers.
 
 #include <cerrno>
 #include <cmath>
@@ -20,9 +21,10 @@ struct UsageError : std::runtime_error {
 
 class Args {
  public:
-  /// `valued`: options that take a value; `flags`: options that do not.
+  /// `valued`: options that take a value; `flags`: options that do not; up to `max_positional`
+  /// other arguments are kept in order (positional()).
   Args(const std::vector<std::string>& argv, const std::set<std::string>& valued,
-       const std::set<std::string>& flags) {
+       const std::set<std::string>& flags, std::size_t max_positional = 0) {
     for (std::size_t i = 0; i < argv.size(); ++i) {
       const std::string& a = argv[i];
       if (a == "-h" || a == "--help") {
@@ -37,6 +39,8 @@ class Args {
         values_[a] = argv[++i];
       } else if (a.rfind("--", 0) == 0) {
         throw UsageError("unknown option " + a + " (see --help)");
+      } else if (positional_.size() < max_positional) {
+        positional_.push_back(a);
       } else {
         throw UsageError("unexpected argument '" + a + "' (see --help)");
       }
@@ -44,6 +48,7 @@ class Args {
   }
 
   bool help() const { return help_; }
+  const std::vector<std::string>& positional() const { return positional_; }
   bool flag(const std::string& name) const { return flags_.count(name) > 0; }
   bool has(const std::string& name) const { return values_.count(name) > 0; }
 
@@ -79,6 +84,7 @@ class Args {
  private:
   std::map<std::string, std::string> values_;
   std::set<std::string> flags_;
+  std::vector<std::string> positional_;
   bool help_ = false;
 };
 

@@ -12,8 +12,10 @@
 #include <knnocc/version.hpp>
 
 #include "args.hpp"
+#include "convert_command.hpp"
 #include "demo_command.hpp"
 #include "eval_command.hpp"
+#include "info_command.hpp"
 #include "map_command.hpp"
 #include "sim_command.hpp"
 #include "track_command.hpp"
@@ -25,10 +27,13 @@ const char* kUsage = R"(usage: knnocc <command> [options]     (knnocc <command> 
 commands:
   demo     the embedded default job: the paper's experiment on a simulated tree scene, OctoMap
            model against k-NN model (Table 1); `demo --scene room`: a LiDAR room demo
-  map      build an occupancy map from a sequence folder or a point file (--model octomap|knn)
+  map      build an occupancy map from a sequence folder, a .graph file or a point file
+           (--model octomap|knn)
   track    follow s_p and its normal distribution over a keyframe sequence (k-NN tracker)
   sim      write the simulated tree scene as a sequence folder plus its reference shapes
   eval     compare a map with reference shapes (the paper's Table 1 metrics)
+  info     what a map (.bt/.ot), cloud, scan graph or sequence folder holds
+  convert  maps and clouds between formats (.bt .ot .ply .pcd .xyz .bin .png, voxel lists)
   version  print the version
 )";
 
@@ -47,6 +52,8 @@ int main(int argc, char** argv) {
     if (command == "track") return knnocc::cli::run_track(args);
     if (command == "sim") return knnocc::cli::run_sim(args);
     if (command == "eval") return knnocc::cli::run_eval(args);
+    if (command == "info") return knnocc::cli::run_info(args);
+    if (command == "convert") return knnocc::cli::run_convert(args);
     if (command == "version" || command == "--version") {
       std::printf("knnocc %s\n", KNNOCC_VERSION_STRING);
       return 0;

@@ -1,5 +1,5 @@
 #pragma once
-// knnocc map: build an occupancy map from a sequence folder or a single point file.
+// knnocc map: build an occupancy map from a sequence folder, a .graph file or a point file.
 
 #include <algorithm>
 #include <chrono>
@@ -9,28 +9,32 @@
 #include <string>
 #include <vector>
 
-#include <knnocc/io/point_file.hpp>
-#include <knnocc/io/sequence.hpp>
+#include <knnocc/io/scan_source.hpp>
 #include <knnocc/io/voxel_list.hpp>
 #include <knnocc/mapper.hpp>
 #include <knnocc/sensor/knn_model.hpp>
 
 #include "args.hpp"
+#include "map_outputs.hpp"
 #include "progress.hpp"
 
 namespace knnocc::cli {
 
-inline const char* map_help() {
-  return R"(usage: knnocc map --input PATH --res R [options]
+inline std::string map_help() {
+  return std::string(R"(usage: knnocc map --input PATH --res R [options]
 
 Builds an occupancy map and prints one summary line:
   clouds N points N occupied N free N seconds S
 (occupied/free: finest-level voxels in the map; points: points inserted, after --crop).
 
 input (--input PATH):
-  a sequence folder     poses.txt (stamp tx ty tz qx qy qz qw, sensor to world) and
-                        clouds/NNNNNN.ply (points in the sensor frame, cloud i <-> pose line i)
-  a point file          .ply, or ASCII .xyz/.dat/.txt (x y z per line); sensor at the origin
+  a sequence folder     poses.txt (sensor to world; TUM "stamp tx ty tz qx qy qz qw" or KITTI
+                        3x4 "r11 r12 r13 tx r21 ... tz" lines) and clouds/NNNNNN.{ply,pcd,bin,xyz}
+                        (points in the sensor frame, cloud i <-> pose line i); a KITTI
+                        sequence: velodyne/*.bin + poses.txt + calib.txt (its Tr is applied)
+  an OctoMap .graph     scans with their poses (OctoMap's ScanGraph)
+  a point file          .ply, .pcd (VIEWPOINT = sensor pose), KITTI .bin, or ASCII
+                        .xyz/.dat/.txt (x y z per line); sensor at the origin
 options:
   --res R               voxel edge in metres (required, > 0)
   --model octomap|knn   inverse sensor model (default octomap: hit 0.7, miss 0.4,
@@ -44,7 +48,8 @@ options:
   --out-voxels FILE     write `x y z logodds` per finest voxel (centre, world frame, %.6f),
                         sorted by x, y, z; written to a temporary file, then renamed
   --voxels WHICH        which voxels --out-voxels writes: occupied, free or all (default)
-  --threads N           threads that walk the rays of each cloud (default 1); the map is the
+)") + map_outputs_help() +
+         R"(  --threads N           threads that walk the rays of each cloud (default 1); the map is the
                         same for every N
 k-NN model (--model knn): the map point cloud is the union of the keyframes (clouds with an `id`
 property: ORB-SLAM map points, each joins once; without ids every point is a new map point);
@@ -91,7 +96,7 @@ inline KnnModelParams knn_params(const Args& args) {
 }
 
 template <class Model>
-int run_map_with(const MapOptions& opt, const Model& model) {
+int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   const auto t0 = std::chrono::steady_clock::now();
   Mapper<Model> mapper(opt.res, model,
                        MapperOptions{opt.max_range, opt.discretize, opt.threads, {}});
@@ -107,40 +112,40 @@ int run_map_with(const MapOptions& opt, const Model& model) {
     ++clouds;
   };
 
-  if (io::is_sequence_dir(opt.input)) {
-    const auto seq = io::Sequence::open(opt.input);
-    Progress progress("map", seq.size());
-    std::vector<Point3d> world;
-    std::vector<std::uint64_t> ids;
-    for (std::size_t i = 0; i < seq.size(); ++i) {
-      const io::Cloud cloud = seq.load_cloud(i);
-      // --crop: distance to the sensor, measured in the sensor frame.
-      io::keyframe_to_world(seq.pose(i), cloud, opt.crop, world, ids);
-      const auto a = std::chrono::steady_clock::now();
+  // --crop: distance to the sensor, measured while the points are still in the sensor frame.
+  const io::ScanSource source = io::ScanSource::open(opt.input);
+  Progress progress("map", source.size());
+  std::vector<Point3f> world_f;  // OctoMap model: float points, as liboctomap
+  std::vector<Point3d> world;    // k-NN model: double, as the tracker keeps them
+  std::vector<std::uint64_t> ids;
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    io::Scan scan = source.load(i);
+    const auto a = std::chrono::steady_clock::now();
+    if constexpr (Mapper<Model>::uses_map_cloud) {
+      io::keyframe_to_world(scan.pose, scan.cloud, opt.crop, world, ids);
       try {
-        add(mapper.insert_keyframe(seq.pose(i).t, world, ids));
+        add(mapper.insert_keyframe(scan.pose.t, world, ids));
       } catch (const std::invalid_argument& e) {  // e.g. clouds with and without ids mixed
-        throw io::Error(seq.cloud_path(i), e.what());
+        throw io::Error(source.path(), "scan " + std::to_string(i) + ": " + e.what());
       }
-      keyframe_ms.push_back(
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
-      progress.update(i + 1);
-    }
-  } else {
-    io::Cloud cloud = io::read_points(opt.input);
-    if (opt.crop > 0.0) {
-      std::size_t kept = 0;
-      for (std::size_t j = 0; j < cloud.points.size(); ++j) {
-        const Point3f& p = cloud.points[j];
-        if (!(std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= opt.crop))
-          continue;
-        if (!cloud.ids.empty()) cloud.ids[kept] = cloud.ids[j];
-        cloud.points[kept++] = p;
+    } else {
+      std::vector<Point3f>& pts = scan.cloud.points;
+      if (opt.crop > 0.0) {
+        std::size_t kept = 0;
+        for (const Point3f& p : pts)
+          if (std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= opt.crop)
+            pts[kept++] = p;
+        pts.resize(kept);
       }
-      cloud.points.resize(kept);
-      if (!cloud.ids.empty()) cloud.ids.resize(kept);
+      if (io::is_identity(scan.pose))
+        world_f.swap(pts);
+      else
+        io::transform_to_world(scan.pose, pts, world_f);
+      add(mapper.insert_keyframe(scan.pose.t, world_f));
     }
-    add(mapper.insert_keyframe(Point3f{}, cloud.points, cloud.ids));
+    keyframe_ms.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
+    progress.update(i + 1);
   }
   const auto& map = mapper.map();
 
@@ -165,6 +170,7 @@ int run_map_with(const MapOptions& opt, const Model& model) {
     });
     io::write_voxel_list(opt.out_voxels, std::move(out));
   }
+  write_map_outputs(map, args);
 
   if constexpr (Mapper<Model>::uses_map_cloud) {
     const auto& tr = mapper.tracker();
@@ -184,15 +190,16 @@ int run_map_with(const MapOptions& opt, const Model& model) {
 }
 
 inline int run_map(const std::vector<std::string>& argv) {
-  const Args args(
-      argv,
-      {"--input", "--res", "--model", "--max-range", "--crop", "--out-voxels", "--voxels",
-       "--threads", "--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"},
-      {"--discretize"});
+  const Args args(argv,
+                  with_map_outputs({"--input", "--res", "--model", "--max-range", "--crop",
+                                    "--out-voxels", "--voxels", "--threads", "--k", "--w",
+                                    "--p-upper", "--p-w", "--p-free", "--s-limit"}),
+                  with_map_output_flags({"--discretize"}));
   if (args.help()) {
-    std::fputs(map_help(), stdout);
+    std::fputs(map_help().c_str(), stdout);
     return 0;
   }
+  check_map_outputs(args);
   const std::string input = args.required("--input");
   if (!args.has("--res")) throw UsageError("--res is required (see --help)");
   const double res = args.number("--res", 0.0);
@@ -224,10 +231,10 @@ inline int run_map(const std::vector<std::string>& argv) {
   if (model == "octomap") {
     for (const char* knn_only : {"--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"})
       if (args.has(knn_only)) throw UsageError(std::string(knn_only) + " needs --model knn");
-    return run_map_with(opt, OctoMapModel{});
+    return run_map_with(args, opt, OctoMapModel{});
   }
   if (opt.discretize) throw UsageError("--discretize applies to --model octomap only");
-  return run_map_with(opt, KnnModel(knn_params(args)));
+  return run_map_with(args, opt, KnnModel(knn_params(args)));
 }
 
 }  // namespace knnocc::cli

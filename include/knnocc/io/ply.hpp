@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "cloud.hpp"
+#include "detail/bytes.hpp"
 #include "detail/file_text.hpp"
 #include "error.hpp"
 
@@ -117,19 +118,6 @@ struct PlyHeader {
   std::size_t data_offset = 0;  // first byte after the end_header line
   std::size_t line_count = 0;   // header lines, so ascii errors can report file line numbers
 };
-
-inline std::vector<std::string> split_words(const char* p, const char* end) {
-  std::vector<std::string> words;
-  while (true) {
-    while (p != end && is_blank(*p)) ++p;
-    if (p == end) break;
-    const char* e = p;
-    while (e != end && !is_blank(*e)) ++e;
-    words.emplace_back(p, e);
-    p = e;
-  }
-  return words;
-}
 
 inline PlyHeader parse_ply_header(const std::string& path, const char* data, std::size_t size) {
   PlyHeader h;
@@ -225,23 +213,6 @@ inline PlyHeader parse_ply_header(const std::string& path, const char* data, std
   h.data_offset = static_cast<std::size_t>(p - data);
   h.line_count = line;
   return h;
-}
-
-inline bool host_is_little_endian() noexcept {
-  const std::uint16_t one = 1;
-  unsigned char first = 0;
-  std::memcpy(&first, &one, 1);
-  return first == 1;
-}
-
-template <class T>
-T load_scalar(const unsigned char* p, bool swap) noexcept {
-  unsigned char b[sizeof(T)];
-  std::memcpy(b, p, sizeof(T));
-  if (swap) std::reverse(b, b + sizeof(T));
-  T v;
-  std::memcpy(&v, b, sizeof(T));
-  return v;
 }
 
 inline float load_coord(const unsigned char* p, PlyType t, bool swap) noexcept {
@@ -488,14 +459,6 @@ inline Cloud read_ply_ascii(const std::string& path, const PlyHeader& h, const P
     cloud.points[i] = Point3f{xyz[0], xyz[1], xyz[2]};
   }
   return cloud;  // elements after vertex are never looked at
-}
-
-template <class T>
-void store_le(char* out, T value) noexcept {
-  unsigned char b[sizeof(T)];
-  std::memcpy(b, &value, sizeof(T));
-  if (!host_is_little_endian()) std::reverse(b, b + sizeof(T));
-  std::memcpy(out, b, sizeof(T));
 }
 
 }  // namespace detail

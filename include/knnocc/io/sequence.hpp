@@ -1,7 +1,13 @@
 #pragma once
-// A sequence folder: poses.txt (one sensor-to-world pose per line) plus clouds/NNNNNN.ply,
-// where the i-th cloud in name order belongs to the i-th pose line. Clouds are in the sensor
-// frame; use transform_to_world(pose(i), ...) to move them.
+// A sequence folder: poses.txt (one sensor-to-world pose per line, TUM or KITTI format) plus a
+// cloud folder, where the i-th cloud in name order belongs to the i-th pose line:
+//   clouds/NNNNNN.{ply,pcd,bin,xyz}   any point file read_points() knows, or
+//   velodyne/NNNNNN.bin               a KITTI odometry sequence (with poses.txt copied or linked
+//                                     from KITTI's poses/NN.txt).
+// In a velodyne/ sequence with a KITTI calib.txt, pose(i) is poses.txt's pose times calib.txt's
+// "Tr" (KITTI's poses are the left camera's, its scans the Velodyne's). PCD viewpoints inside a
+// sequence folder are ignored: poses.txt places the clouds. Clouds are in the sensor frame;
+// use transform_to_world(pose(i), ...) to move them.
 
 #include <algorithm>
 #include <cmath>
@@ -15,23 +21,25 @@
 #include "atomic_file.hpp"
 #include "cloud.hpp"
 #include "error.hpp"
-#include "ply.hpp"
+#include "kitti.hpp"
+#include "point_file.hpp"
 #include "trajectory.hpp"
 
 namespace knnocc::io {
 
-// True if path is a directory holding a poses.txt file and a clouds/ directory. Never throws.
+// True if path is a directory holding a poses.txt file and a clouds/ or velodyne/ directory.
+// Never throws.
 inline bool is_sequence_dir(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::path dir(path);
   return fs::is_directory(dir, ec) && fs::is_regular_file(dir / "poses.txt", ec) &&
-         fs::is_directory(dir / "clouds", ec);
+         (fs::is_directory(dir / "clouds", ec) || fs::is_directory(dir / "velodyne", ec));
 }
 
 class Sequence {
  public:
-  // Reads poses.txt and lists clouds/*.ply; the clouds themselves load lazily.
+  // Reads poses.txt (and calib.txt) and lists the clouds; the clouds themselves load lazily.
   static Sequence open(const std::string& dir) {
     namespace fs = std::filesystem;
     std::error_code ec;
@@ -41,17 +49,29 @@ class Sequence {
     if (!fs::is_regular_file(poses_file, ec)) {
       throw Error(poses_file.string(), "missing poses.txt in sequence folder");
     }
-    const fs::path cloud_dir = root / "clouds";
+    fs::path cloud_dir = root / "clouds";
+    if (!fs::is_directory(cloud_dir, ec)) cloud_dir = root / "velodyne";
     if (!fs::is_directory(cloud_dir, ec)) {
-      throw Error(cloud_dir.string(), "missing clouds/ folder in sequence folder");
+      throw Error((root / "clouds").string(),
+                  "missing clouds/ (or velodyne/) folder in sequence folder");
     }
 
     Sequence seq;
     seq.dir_ = dir;
-    seq.poses_ = read_poses(poses_file.string());
+    seq.poses_ = read_trajectory(poses_file.string());
+    const fs::path calib = root / "calib.txt";
+    if (cloud_dir.filename() == "velodyne" && fs::is_regular_file(calib, ec)) {
+      const Eigen::Isometry3d tr = read_kitti_calib_tr(calib.string());
+      for (Pose& p : seq.poses_) {
+        p.t = p.q * tr.translation() + p.t;
+        p.q = (p.q * Eigen::Quaterniond(tr.rotation())).normalized();
+      }
+    }
     for (fs::directory_iterator it(cloud_dir, ec), end; !ec && it != end; it.increment(ec)) {
       std::error_code type_ec;  // a file vanishing mid-listing is not a listing error
-      if (it->path().extension() == ".ply" && !it->is_directory(type_ec)) {
+      const std::string ext = it->path().extension().string();
+      if ((ext == ".ply" || ext == ".pcd" || ext == ".bin" || ext == ".xyz") &&
+          !it->is_directory(type_ec)) {
         seq.clouds_.push_back(it->path().string());
       }
     }
@@ -59,11 +79,13 @@ class Sequence {
     // Directory order is arbitrary; zero-padded names make name order the pose order.
     std::sort(seq.clouds_.begin(), seq.clouds_.end());
 
-    if (seq.clouds_.empty()) throw Error(cloud_dir.string(), "no .ply clouds in folder");
+    if (seq.clouds_.empty()) {
+      throw Error(cloud_dir.string(), "no .ply, .pcd, .bin or .xyz clouds in folder");
+    }
     if (seq.clouds_.size() != seq.poses_.size()) {
-      throw Error(dir, "poses.txt has " + std::to_string(seq.poses_.size()) +
-                           " poses but clouds/ has " + std::to_string(seq.clouds_.size()) +
-                           " .ply files");
+      throw Error(dir, "poses.txt has " + std::to_string(seq.poses_.size()) + " poses but " +
+                           cloud_dir.filename().string() + "/ has " +
+                           std::to_string(seq.clouds_.size()) + " clouds");
     }
     return seq;
   }
@@ -83,7 +105,7 @@ class Sequence {
   }
 
   // Cloud i in the sensor frame.
-  Cloud load_cloud(std::size_t i) const { return read_ply(cloud_path(i)); }
+  Cloud load_cloud(std::size_t i) const { return read_points(cloud_path(i)); }
 
  private:
   Sequence() = default;

@@ -1,12 +1,15 @@
 #pragma once
-// Sensor poses: the "stamp tx ty tz qx qy qz qw" trajectory format, and moving clouds into the
-// world frame with them.
+// Sensor poses: the TUM trajectory format "stamp tx ty tz qx qy qz qw", KITTI's 3x4 matrices
+// (12 numbers per line, row-major [R | t]), and moving clouds into the world frame with them.
+// read_trajectory() tells the two apart by the number of values per line.
 //
 // One pose per line (sensor-to-world). NOTE the quaternion order on the line is x y z w, while
 // Eigen::Quaterniond's constructor takes w first. '#' starts a comment anywhere on a line; blank
 // lines are skipped. Each data line must hold exactly 8 numbers, all finite. A quaternion whose
 // norm is off 1 by more than 1e-3 is an error (it usually means a column-order mix-up); smaller
 // deviations, e.g. from 4-decimal files, are normalised away.
+// KITTI lines have no time stamp (stamp = line index); R must be a rotation within 1e-3
+// (R^T R = I, det R = +1), else io::Error.
 
 #include <cmath>
 #include <cstdio>
@@ -16,6 +19,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "atomic_file.hpp"
 #include "cloud.hpp"
 #include "detail/file_text.hpp"
 #include "error.hpp"
@@ -66,6 +70,103 @@ inline std::vector<Pose> read_poses(const std::string& path) {
     poses.push_back(pose);
   });
   return poses;
+}
+
+namespace detail {
+
+// A pose from a row-major 3x4 [R | t]; "" on success, else the problem.
+inline std::string pose_from_matrix(const double m[12], Pose& pose) {
+  for (int k = 0; k < 12; ++k) {
+    if (!std::isfinite(m[k])) return "non-finite number";
+  }
+  Eigen::Matrix3d R;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) R(r, c) = m[4 * r + c];
+  }
+  const double off = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (!(off <= 1e-3) || !(R.determinant() > 0.0)) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%g", off);
+    return std::string("the 3x3 part is not a rotation (|R^T R - I| = ") + text +
+           ", det = " + std::to_string(R.determinant()) + ")";
+  }
+  pose.q = Eigen::Quaterniond(R).normalized();
+  pose.t = Eigen::Vector3d(m[3], m[7], m[11]);
+  return {};
+}
+
+inline void append_number(std::string& out, double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", v);  // reads back to the same double
+  out += text;
+}
+
+}  // namespace detail
+
+// KITTI odometry poses: one "r11 r12 r13 tx r21 r22 r23 ty r31 r32 r33 tz" line per scan.
+inline std::vector<Pose> read_kitti_poses(const std::string& path) {
+  const detail::FileBuffer buf = detail::read_file(path);
+  std::vector<Pose> poses;
+  detail::for_each_line(buf.data(), buf.end(), [&](std::size_t line, const char* b, const char* e) {
+    const std::string at = "line " + std::to_string(line) + ": ";
+    double v[13];
+    const std::size_t n = detail::scan_line_numbers(path, line, b, e, v, 13, true);
+    if (n == 0) return;
+    if (n != 12) {
+      throw Error(path, at + "expected 12 numbers (a 3x4 pose matrix, row by row), found " +
+                            (n > 12 ? std::string("more") : std::to_string(n)));
+    }
+    Pose pose;
+    const std::string problem = detail::pose_from_matrix(v, pose);
+    if (!problem.empty()) throw Error(path, at + problem);
+    pose.stamp = static_cast<double>(poses.size());
+    poses.push_back(pose);
+  });
+  return poses;
+}
+
+// TUM (8 values per line) or KITTI (12 values per line), decided by the first data line.
+inline std::vector<Pose> read_trajectory(const std::string& path) {
+  const detail::FileBuffer buf = detail::read_file(path);
+  std::size_t values = 0;
+  detail::for_each_line(buf.data(), buf.end(), [&](std::size_t line, const char* b, const char* e) {
+    if (values != 0) return;
+    double v[13];
+    values = detail::scan_line_numbers(path, line, b, e, v, 13, true);
+  });
+  return values == 12 ? read_kitti_poses(path) : read_poses(path);
+}
+
+inline void write_tum_poses(const std::string& path, const std::vector<Pose>& poses) {
+  std::string out = "# stamp tx ty tz qx qy qz qw\n";
+  for (const Pose& p : poses) {
+    const double v[8] = {p.stamp, p.t.x(), p.t.y(), p.t.z(), p.q.x(), p.q.y(), p.q.z(), p.q.w()};
+    for (int i = 0; i < 8; ++i) {
+      if (i) out += ' ';
+      detail::append_number(out, v[i]);
+    }
+    out += '\n';
+  }
+  AtomicFile file(path);
+  file.write(out);
+  file.commit();
+}
+
+inline void write_kitti_poses(const std::string& path, const std::vector<Pose>& poses) {
+  std::string out;
+  for (const Pose& p : poses) {
+    const Eigen::Matrix3d R = p.q.toRotationMatrix();
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 4; ++c) {
+        if (r || c) out += ' ';
+        detail::append_number(out, c < 3 ? R(r, c) : p.t[r]);
+      }
+    }
+    out += '\n';
+  }
+  AtomicFile file(path);
+  file.write(out);
+  file.commit();
 }
 
 // out[i] = R * in[i] + t, evaluated in double and rounded to float once at the end, so large

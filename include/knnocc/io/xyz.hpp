@@ -5,8 +5,10 @@
 // Blank lines and lines whose first non-blank character is '#' are skipped. A line with fewer
 // than three numbers, or an unparsable number among the first three, throws io::Error with the
 // line number. NaN/Inf values are returned as read; the mapping layer skips and counts them.
+// write_xyz() writes "x y z" lines with the shortest text that reads back to the same floats.
 
 #include <string>
+#include <vector>
 
 #include "cloud.hpp"
 #include "detail/file_text.hpp"
@@ -31,6 +33,27 @@ inline Cloud read_xyz(const std::string& path) {
     cloud.points.push_back(Point3f{v[0], v[1], v[2]});
   });
   return cloud;
+}
+
+inline void write_xyz(const std::string& path, const std::vector<Point3f>& pts) {
+  AtomicFile out(path);
+  std::vector<char> chunk(1 << 16);
+  char* w = chunk.data();
+  char* const lim = chunk.data() + chunk.size();
+  for (const Point3f& p : pts) {
+    if (lim - w < 200) {  // room for one full line
+      out.write(chunk.data(), static_cast<std::size_t>(w - chunk.data()));
+      w = chunk.data();
+    }
+    w = detail::format_float_roundtrip(w, lim, p.x);
+    *w++ = ' ';
+    w = detail::format_float_roundtrip(w, lim, p.y);
+    *w++ = ' ';
+    w = detail::format_float_roundtrip(w, lim, p.z);
+    *w++ = '\n';
+  }
+  out.write(chunk.data(), static_cast<std::size_t>(w - chunk.data()));
+  out.commit();
 }
 
 }  // namespace knnocc::io

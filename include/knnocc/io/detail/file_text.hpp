@@ -19,6 +19,7 @@
 #include <system_error>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "../../core/point_traits.hpp"
 #include "../atomic_file.hpp"
@@ -123,6 +124,20 @@ bool parse_int_token(const char* p, const char* e, T& out) {
   if (p != e && *p == '+') ++p;
   const std::from_chars_result r = std::from_chars(p, e, out);
   return r.ec == std::errc() && r.ptr == e && p != e;
+}
+
+// The blank-separated words of [p, end).
+inline std::vector<std::string> split_words(const char* p, const char* end) {
+  std::vector<std::string> words;
+  while (true) {
+    while (p != end && is_blank(*p)) ++p;
+    if (p == end) break;
+    const char* e = p;
+    while (e != end && !is_blank(*e)) ++e;
+    words.emplace_back(p, e);
+    p = e;
+  }
+  return words;
 }
 
 // Calls fn(line_number, begin, end) for every line (1-based; '\r' before '\n' stripped).

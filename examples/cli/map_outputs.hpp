@@ -1,0 +1,77 @@
+#pragma once
+// The map files `knnocc map` (and `knnocc convert`) can write besides --out-voxels:
+// OctoMap trees for octovis/octomap_server, PLY voxels for CloudCompare/MeshLab, a PNG picture.
+
+#include <cctype>
+#include <filesystem>
+#include <set>
+#include <string>
+
+#include <knnocc/io/octomap_tree.hpp>
+#include <knnocc/io/voxel_export.hpp>
+#include <knnocc/map/occupancy_map.hpp>
+
+#include "args.hpp"
+#include "map_picture.hpp"
+
+namespace knnocc::cli {
+
+/// Options of write_map_outputs(), for Args: valued options and flags.
+inline std::set<std::string> map_output_options() {
+  return {"--out-bt", "--out-ot", "--out-ply", "--out-png"};
+}
+inline std::set<std::string> map_output_flags() { return {"--ply-cubes", "--ply-free"}; }
+
+inline std::set<std::string> with_map_outputs(std::set<std::string> options) {
+  for (const auto& o : map_output_options()) options.insert(o);
+  return options;
+}
+inline std::set<std::string> with_map_output_flags(std::set<std::string> flags) {
+  for (const auto& f : map_output_flags()) flags.insert(f);
+  return flags;
+}
+
+inline const char* map_outputs_help() {
+  return R"(  --out-bt FILE         OctoMap binary tree (.bt) for octovis / octomap_server: occupied or
+                        free per voxel, pruned as OctoMap prunes
+  --out-ot FILE         OctoMap full tree (.ot): log-odds per node
+  --out-ply FILE        occupied voxel centres as a PLY point cloud (colour = height,
+                        property logodds) for CloudCompare / MeshLab
+  --ply-cubes           --out-ply writes one cube (8 vertices, 6 faces) per voxel instead
+  --ply-free            --out-ply includes free voxels (light grey)
+  --out-png FILE        a picture: top view (colour = height) above a side view
+)";
+}
+
+inline std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+/// Checks the output options before any work (octovis picks the reader by the extension).
+inline void check_map_outputs(const Args& args) {
+  if (args.has("--out-bt") && lower_extension(args.str("--out-bt")) != ".bt")
+    throw UsageError("--out-bt needs a file name ending in .bt, got '" + args.str("--out-bt") +
+                     "'");
+  if (args.has("--out-ot") && lower_extension(args.str("--out-ot")) != ".ot")
+    throw UsageError("--out-ot needs a file name ending in .ot, got '" + args.str("--out-ot") +
+                     "'");
+  if ((args.flag("--ply-cubes") || args.flag("--ply-free")) && !args.has("--out-ply"))
+    throw UsageError("--ply-cubes and --ply-free need --out-ply");
+}
+
+/// Writes every requested output (each atomically; io::Error names the file on failure).
+inline void write_map_outputs(const OccupancyMap<OcKey>& map, const Args& args) {
+  if (args.has("--out-bt")) io::write_bt(args.str("--out-bt"), map);
+  if (args.has("--out-ot")) io::write_ot(args.str("--out-ot"), map);
+  if (args.has("--out-ply")) {
+    io::VoxelExportOptions o;
+    o.shape = args.flag("--ply-cubes") ? io::VoxelShape::cubes : io::VoxelShape::points;
+    o.which = args.flag("--ply-free") ? io::VoxelSelection::all : io::VoxelSelection::occupied;
+    io::write_voxels_ply(args.str("--out-ply"), map, o);
+  }
+  if (args.has("--out-png")) write_map_png(args.str("--out-png"), map);
+}
+
+}  // namespace knnocc::cli

@@ -1,0 +1,388 @@
+#pragma once
+// OctoMap's tree files, read into and written from an OccupancyMap<OcKey>, without liboctomap.
+//
+//   .bt  "binary" tree: 2 bits per child (unknown / free / occupied / has children); what
+//        octovis, octomap_server and OctoMap's tools exchange.
+//   .ot  full tree: float log-odds per node plus an 8-bit child mask.
+//
+// Writing builds OctoMap's octree on the fly from the map's finest voxels (bricks in Morton
+// order, the bottom three levels inside each brick) with exactly the nodes OctoMap's own writer
+// would emit:
+//   .bt  writeBinary(): every voxel reduced to occupied/free (toMaxLikelihood), then pruned, so
+//        a node whose 8 children are leaves of one class becomes a leaf (the root never does).
+//   .ot  write() of a tree built by insertion: pruned where 8 children are leaves with exactly
+//        equal log-odds; an inner node stores the max of its children.
+// The bytes equal liboctomap's for the same map (tests/test_octomap_tree.cpp compares them).
+//
+// Reading expands each leaf into finest voxels: .bt free leaves get clamp_min, occupied leaves
+// clamp_max (as liboctomap's reader); .ot leaves keep their log-odds, clamped into the map's
+// [clamp_min, clamp_max]; inner values of .ot files are not needed (the map recomputes them as
+// the max of the leaves). Leaves at coarse depths (pruned space) become whole bricks stored
+// compacted, and OctreeReadOptions::max_voxels bounds how many finest voxels a file may claim,
+// so a 20-byte file with a leaf the size of the world is an error, not an allocation.
+// ColorOcTree and OcTreeStamped .ot files are read too (colours ignored).
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "../core/key.hpp"
+#include "../map/occupancy_map.hpp"
+#include "atomic_file.hpp"
+#include "detail/bytes.hpp"
+#include "detail/file_text.hpp"
+#include "detail/octree_format.hpp"
+#include "error.hpp"
+
+namespace knnocc::io {
+
+struct OctreeReadOptions {
+  OccupancyParams params{};  ///< clamping and threshold of the map that is built
+  /// Largest number of finest-level voxels the file's leaves may cover (pruned leaves at
+  /// coarse depths cover up to 8^15 each); more is an io::Error.
+  std::uint64_t max_voxels = std::uint64_t{1} << 31;
+};
+
+/// What a .bt/.ot file holds, from one validating pass (no map is built).
+struct OctreeInfo {
+  bool binary = false;  ///< .bt (true) or .ot
+  std::string id;       ///< tree type from the header, e.g. OcTree
+  double resolution = 0.0;
+  std::uint64_t nodes = 0;
+  std::uint64_t occupied_leaves = 0, free_leaves = 0;
+  std::uint64_t occupied_voxels = 0, free_voxels = 0;  ///< finest-level voxels the leaves cover
+  int min_leaf_depth = 0, max_leaf_depth = 0;          ///< 0 when there are no leaves
+  double min[3] = {0, 0, 0}, max[3] = {0, 0, 0};       ///< box of the leaves (metres)
+};
+
+namespace detail {
+
+// Bytes each .ot node carries between its float and its child mask, by tree type.
+inline std::size_t octree_node_extra(const std::string& path, const OctreeHeader& h) {
+  if (h.id == "OcTree") return 0;
+  if (h.id == "OcTreeStamped") return 0;  // its time stamps are not written
+  if (h.id == "ColorOcTree") return 3;    // r, g, b
+  throw Error(path, "unsupported OctoMap tree type '" + h.id +
+                        "' (supported: OcTree, ColorOcTree, OcTreeStamped)");
+}
+
+inline std::uint64_t voxels_in_node(int depth) {
+  return std::uint64_t{1} << (3 * (kOctreeDepth - depth));
+}
+
+// Runs the walker over a whole file; leaf(depth, corner, value, occupied_code).
+template <class Leaf>
+void walk_octree_file(const std::string& path, const FileBuffer& buf, const OctreeHeader& h,
+                      Leaf&& leaf) {
+  const std::size_t extra = octree_node_extra(path, h);
+  OctreeWalker walker(path, h, reinterpret_cast<const unsigned char*>(buf.data()) + h.data_offset,
+                      buf.size() - h.data_offset, extra);
+  walker.run(leaf);
+}
+
+// Writes one leaf of a read tree into the map: whole bricks (compacted) for leaves at depth 13
+// or coarser, single voxels below.
+inline void put_octree_leaf(OccupancyMap<OcKey>& map, int d, const NodeCorner& c, float value) {
+  using layout = BrickLayout<OcKey>;
+  const OccupancyParams& p = map.params();
+  const float v = std::min(std::max(value, p.clamp_min), p.clamp_max);
+  const std::uint32_t span = std::uint32_t{1} << (kOctreeDepth - d);
+  if (span >= static_cast<std::uint32_t>(kBrickEdge)) {
+    const std::int64_t bricks = span >> kBrickBits;
+    const std::int64_t b0[3] = {c.k[0] >> kBrickBits, c.k[1] >> kBrickBits, c.k[2] >> kBrickBits};
+    for (std::int64_t x = 0; x < bricks; ++x)
+      for (std::int64_t y = 0; y < bricks; ++y)
+        for (std::int64_t z = 0; z < bricks; ++z) {
+          auto& b =
+              map.brick_at(map.brick_slot(layout::pack_brick(b0[0] + x, b0[1] + y, b0[2] + z)));
+          const std::size_t had = static_cast<std::size_t>(b.known.count());
+          b.values.reset();
+          b.known.w.fill(~std::uint64_t{0});
+          b.uniform = v;
+          map.add_known(static_cast<std::size_t>(kBrickVoxels) - had);
+        }
+    return;
+  }
+  for (std::uint32_t x = 0; x < span; ++x)
+    for (std::uint32_t y = 0; y < span; ++y)
+      for (std::uint32_t z = 0; z < span; ++z)
+        map.set(
+            OcKey(static_cast<std::uint16_t>(c.k[0] + x), static_cast<std::uint16_t>(c.k[1] + y),
+                  static_cast<std::uint16_t>(c.k[2] + z)),
+            v);
+}
+
+inline std::string format_resolution(double res) {  // std::ostream's default, as OctoMap writes
+  char text[64];
+  std::snprintf(text, sizeof text, "%g", res);
+  return text;
+}
+
+// Builds OctoMap's node stream for a map (Full: .ot, else .bt); see the file comment.
+template <bool Full>
+class OctreeEncoder {
+ public:
+  using Map = OccupancyMap<OcKey>;
+  using Brick = Map::Brick;
+
+  explicit OctreeEncoder(const Map& map) : map_(map) {}
+
+  /// The whole file: header and node stream.
+  std::string encode() {
+    const std::vector<Brick>& bricks = map_.bricks();
+    order_.clear();
+    order_.reserve(bricks.size());
+    for (std::size_t i = 0; i < bricks.size(); ++i) {
+      if (!bricks[i].known.any()) continue;
+      const auto o = BrickLayout<OcKey>::origin_of(bricks[i].coord);
+      order_.push_back({morton(static_cast<std::uint32_t>(o[0] >> kBrickBits),
+                               static_cast<std::uint32_t>(o[1] >> kBrickBits),
+                               static_cast<std::uint32_t>(o[2] >> kBrickBits)),
+                        i});
+    }
+    std::sort(order_.begin(), order_.end(),
+              [](const Entry& a, const Entry& b) { return a.morton < b.morton; });
+    data_.clear();
+    nodes_ = 0;
+    Summary root;
+    if (!order_.empty()) tree_node(0, 0, order_.size(), root);
+
+    std::string out = std::string(Full ? kOtFirstLine : kBtFirstLine) + "\n" + kOctreeComment +
+                      "id OcTree\nsize " + std::to_string(nodes_) + "\nres " +
+                      format_resolution(map_.resolution()) + "\ndata\n";
+    out += data_;
+    return out;
+  }
+
+ private:
+  static constexpr int kBrickDepth = kOctreeDepth - kBrickBits;  // 13: a brick is one node
+
+  struct Entry {
+    std::uint64_t morton;
+    std::size_t index;
+  };
+  struct Summary {
+    bool leaf = false;   // the subtree collapsed into one leaf
+    float value = 0.0f;  // the leaf's value, or the max of the children
+  };
+
+  // Child index bits x -> 1, y -> 2, z -> 4 at every level: a pre-order walk visits bricks in
+  // increasing Morton order.
+  static std::uint64_t morton(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    std::uint64_t m = 0;
+    for (int j = 0; j < kBrickDepth; ++j) {
+      m |= static_cast<std::uint64_t>(((x >> j) & 1u) | (((y >> j) & 1u) << 1) |
+                                      (((z >> j) & 1u) << 2))
+           << (3 * j);
+    }
+    return m;
+  }
+
+  bool occupied(float v) const { return map_.is_occupied(v); }
+  bool same(float a, float b) const { return Full ? a == b : occupied(a) == occupied(b); }
+
+  void leaf(float v, Summary& out) {
+    ++nodes_;
+    if (Full) {
+      char bytes[5];
+      store_le(bytes, v);
+      bytes[4] = 0;
+      data_.append(bytes, 5);
+    }
+    out.leaf = true;
+    out.value = v;
+  }
+
+  // A node whose children child(i, summary) -> present emit themselves in order 0..7. With no
+  // child present nothing is emitted; with 8 equal leaves (OctoMap's pruning) the children's
+  // bytes are dropped and the node becomes a leaf.
+  template <class Child>
+  bool node(int d, Child&& child, Summary& out) {
+    const std::size_t start = data_.size();
+    const std::uint64_t nodes_before = nodes_;
+    ++nodes_;
+    data_.resize(start + (Full ? 5 : 2));
+    Summary kids[8];
+    unsigned present = 0;
+    for (int i = 0; i < 8; ++i) {
+      if (child(i, kids[i])) present |= 1u << i;
+    }
+    if (present == 0) {
+      data_.resize(start);
+      nodes_ = nodes_before;
+      return false;
+    }
+    bool collapse = d > 0 && present == 0xffu;
+    for (int i = 0; collapse && i < 8; ++i)
+      collapse = kids[i].leaf && same(kids[i].value, kids[0].value);
+    if (collapse) {
+      data_.resize(start);
+      nodes_ = nodes_before;
+      leaf(kids[0].value, out);
+      return true;
+    }
+    float max = -std::numeric_limits<float>::infinity();
+    unsigned codes = 0;
+    for (int i = 0; i < 8; ++i) {
+      if (!((present >> i) & 1u)) continue;
+      max = std::max(max, kids[i].value);
+      const unsigned code = !kids[i].leaf ? 3u : occupied(kids[i].value) ? 2u : 1u;
+      codes |= code << (2 * i);
+    }
+    char* h = &data_[start];
+    if (Full) {
+      store_le(h, max);
+      h[4] = static_cast<char>(present);
+    } else {
+      h[0] = static_cast<char>(codes & 0xffu);
+      h[1] = static_cast<char>(codes >> 8);
+    }
+    out.leaf = false;
+    out.value = max;
+    return true;
+  }
+
+  // Depth d < 13 over the bricks order_[lo, hi), which all lie in this node.
+  bool tree_node(int d, std::size_t lo, std::size_t hi, Summary& out) {
+    if (d == kBrickDepth) return brick_node(map_.bricks()[order_[lo].index], out);
+    const int shift = 3 * (kBrickDepth - 1 - d);
+    std::size_t cur = lo;
+    return node(
+        d,
+        [&](int i, Summary& s) {
+          std::size_t end = cur;
+          while (end < hi && static_cast<int>((order_[end].morton >> shift) & 7u) == i) ++end;
+          if (end == cur) return false;
+          const std::size_t begin = cur;
+          cur = end;
+          return tree_node(d + 1, begin, end, s);
+        },
+        out);
+  }
+
+  bool brick_node(const Brick& b, Summary& out) {
+    if (b.known.count() == kBrickVoxels) {  // a whole known brick may be a single leaf
+      const float first = b.get(0);
+      bool uniform = true;
+      for (int i = 1; uniform && i < kBrickVoxels; ++i) uniform = same(b.get(i), first);
+      if (uniform) {
+        leaf(first, out);
+        return true;
+      }
+    }
+    return brick_sub(b, kBrickDepth, 0, 0, 0, out);
+  }
+
+  bool brick_sub(const Brick& b, int d, int x, int y, int z, Summary& out) {
+    if (d == kOctreeDepth) {
+      const int i = x | (y << kBrickBits) | (z << (2 * kBrickBits));
+      if (!b.known.test(i)) return false;
+      leaf(b.get(i), out);
+      return true;
+    }
+    const int half = 1 << (kOctreeDepth - 1 - d);
+    return node(
+        d,
+        [&](int i, Summary& s) {
+          return brick_sub(b, d + 1, x + ((i & 1) ? half : 0), y + ((i & 2) ? half : 0),
+                           z + ((i & 4) ? half : 0), s);
+        },
+        out);
+  }
+
+  const Map& map_;
+  std::vector<Entry> order_;
+  std::string data_;
+  std::uint64_t nodes_ = 0;
+};
+
+}  // namespace detail
+
+/// Header and leaf statistics of a .bt/.ot file; throws io::Error when the file is malformed.
+/// `params` decides which .ot leaves count as occupied.
+inline OctreeInfo inspect_octree(const std::string& path, const OccupancyParams& params = {}) {
+  const detail::FileBuffer buf = detail::read_file(path);
+  const detail::OctreeHeader h = detail::parse_octree_header(path, buf.data(), buf.size());
+  OctreeInfo info;
+  info.min_leaf_depth = detail::kOctreeDepth + 1;
+  std::uint32_t lo[3] = {~0u, ~0u, ~0u}, hi[3] = {0, 0, 0};  // key box, hi exclusive
+  detail::walk_octree_file(
+      path, buf, h, [&](int d, const detail::NodeCorner& c, float v, bool occupied_code) {
+        for (int a = 0; a < 3; ++a) {
+          lo[a] = std::min(lo[a], c.k[a]);
+          hi[a] = std::max(hi[a], c.k[a] + (std::uint32_t{1} << (detail::kOctreeDepth - d)));
+        }
+        const bool occ = h.binary ? occupied_code : v >= params.occupancy_threshold;
+        (occ ? info.occupied_leaves : info.free_leaves) += 1;
+        (occ ? info.occupied_voxels : info.free_voxels) += detail::voxels_in_node(d);
+        info.min_leaf_depth = std::min(info.min_leaf_depth, d);
+        info.max_leaf_depth = std::max(info.max_leaf_depth, d);
+      });
+  info.binary = h.binary;
+  info.id = h.id;
+  info.resolution = h.resolution;
+  info.nodes = h.size;
+  if (info.occupied_leaves + info.free_leaves == 0) {
+    info.min_leaf_depth = 0;
+    return info;
+  }
+  for (int a = 0; a < 3; ++a) {
+    info.min[a] = (static_cast<double>(lo[a]) - 32768.0) * h.resolution;
+    info.max[a] = (static_cast<double>(hi[a]) - 32768.0) * h.resolution;
+  }
+  return info;
+}
+
+/// Reads a .bt or .ot file (told apart by its first line) into a new map.
+inline OccupancyMap<OcKey> read_octree(const std::string& path,
+                                       const OctreeReadOptions& options = {}) {
+  const detail::FileBuffer buf = detail::read_file(path);
+  // Pass 1 validates everything and sizes the expansion before anything is allocated.
+  const detail::OctreeHeader h = detail::parse_octree_header(path, buf.data(), buf.size());
+  std::uint64_t voxels = 0;
+  detail::walk_octree_file(path, buf, h, [&](int d, const detail::NodeCorner&, float, bool) {
+    voxels += detail::voxels_in_node(d);
+    if (voxels > options.max_voxels) {
+      throw Error(path, "the tree's leaves cover more than " + std::to_string(options.max_voxels) +
+                            " finest-level voxels (OctreeReadOptions::max_voxels); a leaf at "
+                            "depth " +
+                            std::to_string(d) + " alone covers " +
+                            std::to_string(detail::voxels_in_node(d)));
+    }
+  });
+  OccupancyMap<OcKey> map(h.resolution, options.params);
+  const OccupancyParams& p = map.params();
+  detail::walk_octree_file(path, buf, h,
+                           [&](int d, const detail::NodeCorner& c, float v, bool occupied_code) {
+                             if (h.binary) v = occupied_code ? p.clamp_max : p.clamp_min;
+                             detail::put_octree_leaf(map, d, c, v);
+                           });
+  return map;
+}
+
+/// The bytes of `map` as liboctomap's OcTree::writeBinary would write them (.bt).
+inline std::string encode_bt(const OccupancyMap<OcKey>& map) {
+  return detail::OctreeEncoder<false>(map).encode();
+}
+/// The bytes of `map` as liboctomap's OcTree::write would write them (.ot).
+inline std::string encode_ot(const OccupancyMap<OcKey>& map) {
+  return detail::OctreeEncoder<true>(map).encode();
+}
+
+inline void write_bt(const std::string& path, const OccupancyMap<OcKey>& map) {
+  AtomicFile out(path);
+  out.write(encode_bt(map));
+  out.commit();
+}
+inline void write_ot(const std::string& path, const OccupancyMap<OcKey>& map) {
+  AtomicFile out(path);
+  out.write(encode_ot(map));
+  out.commit();
+}
+
+}  // namespace knnocc::io

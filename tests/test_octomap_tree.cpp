@@ -1,0 +1,388 @@
+// OctoMap .bt/.ot files: byte-exact round trip of the real geb079.bt, liboctomap (when found) as
+// the oracle for the bytes we write and for reading them back, and malformed files.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <knnocc/io/octomap_tree.hpp>
+#include <knnocc/io/xyz.hpp>
+#include <knnocc/map/scan_inserter.hpp>
+
+#include "test_support.hpp"
+
+#if KNNOCC_HAVE_OCTOMAP
+#include <octomap/AbstractOcTree.h>
+#include <octomap/ColorOcTree.h>
+#include <octomap/OcTree.h>
+#include <octomap/OcTreeStamped.h>
+#endif
+
+namespace io = knnocc::io;
+namespace fs = std::filesystem;
+using knnocc::OccupancyMap;
+using knnocc::OcKey;
+using knnocc::Point3f;
+
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void spit(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+std::string scratch(const std::string& name) {
+  return (knnocc::test::scratch_dir("octomap_tree") / name).string();
+}
+
+// Every known voxel of a equals b's (and the counts match), values compared exactly.
+void check_same_voxels(const OccupancyMap<OcKey>& a, const OccupancyMap<OcKey>& b) {
+  CHECK(a.num_voxels() == b.num_voxels());
+  std::size_t differing = 0;
+  a.for_each_voxel([&](const OcKey& k, float v) {
+    const auto w = b.logodds(k);
+    differing += !w || *w != v;
+  });
+  CHECK(differing == 0);
+}
+
+// A map with dense uniform blocks (pruned at several depths), mixed blocks, free space around,
+// and single voxels at the key range's edges.
+OccupancyMap<OcKey> mixed_map(std::uint64_t seed) {
+  OccupancyMap<OcKey> map(0.05);
+  const auto& p = map.params();
+  knnocc::test::Rng rng(seed);
+  std::uniform_int_distribution<int> coord(32700, 32830), pick(0, 3);
+  for (int block = 0; block < 12; ++block) {
+    const int edge = 1 << (1 + block % 4);  // 2..16 voxels
+    const int x0 = coord(rng) & ~(edge - 1), y0 = coord(rng) & ~(edge - 1),
+              z0 = coord(rng) & ~(edge - 1);
+    const int kind = pick(rng);
+    for (int x = 0; x < edge; ++x)
+      for (int y = 0; y < edge; ++y)
+        for (int z = 0; z < edge; ++z) {
+          const OcKey k(static_cast<std::uint16_t>(x0 + x), static_cast<std::uint16_t>(y0 + y),
+                        static_cast<std::uint16_t>(z0 + z));
+          float v = kind == 0 ? p.clamp_max : kind == 1 ? p.clamp_min : -0.4f;
+          if (kind == 3) v = (x + y + z) % 3 ? 0.85f : -1.2f;
+          map.set(k, v);
+        }
+  }
+  std::uniform_real_distribution<float> val(-2.f, 3.5f);
+  for (int i = 0; i < 3000; ++i)
+    map.set(OcKey(static_cast<std::uint16_t>(coord(rng)), static_cast<std::uint16_t>(coord(rng)),
+                  static_cast<std::uint16_t>(coord(rng))),
+            val(rng));
+  map.set(OcKey(0, 0, 0), 1.0f);
+  map.set(OcKey(65535, 65535, 65535), -1.0f);
+  return map;
+}
+
+}  // namespace
+
+TEST_CASE("octomap_tree.geb079 round trip gives identical bytes") {
+  const std::string path = knnocc::test::data_path("octomap_fr079/geb079.bt");
+  if (path.empty()) {
+    MESSAGE("skipped: ../shared/data/octomap_fr079/geb079.bt not available");
+    return;
+  }
+  const io::OctreeInfo info = io::inspect_octree(path);
+  CHECK(info.binary);
+  CHECK(info.id == "OcTree");
+  CHECK(info.resolution == doctest::Approx(0.08));
+  CHECK(info.nodes == 532566);  // ../shared/data/README.md
+  CHECK(info.occupied_leaves == 143729);
+  CHECK(info.free_leaves == 284415);
+  CHECK(info.min_leaf_depth == 13);
+
+  const OccupancyMap<OcKey> map = io::read_octree(path);
+  const auto counts = map.count_voxels();
+  CHECK(counts.occupied == info.occupied_voxels);
+  CHECK(counts.free == info.free_voxels);
+  CHECK(map.num_voxels() == 1136432);
+  MESSAGE("geb079: " << counts.occupied << " occupied, " << counts.free
+                     << " free finest voxels; map memory " << map.memory_usage() / 1e6 << " MB");
+
+  const std::string original = slurp(path);
+  const std::string ours = io::encode_bt(map);
+  CHECK(ours.size() == original.size());
+  CHECK(ours == original);
+  const std::string out = scratch("geb079_copy.bt");
+  io::write_bt(out, map);
+  CHECK(slurp(out) == original);
+  CHECK(!fs::exists(out + ".tmp"));
+
+  // .ot of the same map, read back: the same voxels and values.
+  const std::string ot = scratch("geb079.ot");
+  io::write_ot(ot, map);
+  check_same_voxels(map, io::read_octree(ot));
+}
+
+TEST_CASE("octomap_tree.round trips of a mixed map") {
+  const OccupancyMap<OcKey> map = mixed_map(7);
+  const std::string ot = scratch("mixed.ot"), bt = scratch("mixed.bt");
+  io::write_ot(ot, map);
+  io::write_bt(bt, map);
+  const auto back = io::read_octree(ot);
+  CHECK(back.resolution() == 0.05);
+  check_same_voxels(map, back);
+  CHECK(io::encode_ot(back) == slurp(ot));
+
+  // .bt keeps occupancy only: every voxel comes back at the clamp bound of its class.
+  const auto bin = io::read_octree(bt);
+  CHECK(bin.num_voxels() == map.num_voxels());
+  std::size_t wrong = 0;
+  map.for_each_voxel([&](const OcKey& k, float v) {
+    const auto w = bin.logodds(k);
+    const float expect = map.is_occupied(v) ? map.params().clamp_max : map.params().clamp_min;
+    wrong += !w || *w != expect;
+  });
+  CHECK(wrong == 0);
+  CHECK(io::encode_bt(bin) == slurp(bt));
+
+  // Pruned nodes exist (uniform blocks): fewer nodes than voxels would need.
+  const io::OctreeInfo info = io::inspect_octree(bt);
+  CHECK(info.min_leaf_depth < 16);
+  CHECK(info.occupied_voxels + info.free_voxels == map.num_voxels());
+}
+
+TEST_CASE("octomap_tree.empty map") {
+  const OccupancyMap<OcKey> empty(0.1);
+  const std::string bt = io::encode_bt(empty);
+  CHECK(bt.find("size 0\nres 0.1\ndata\n") != std::string::npos);
+  const std::string path = scratch("empty.bt");
+  spit(path, bt);
+  CHECK(io::read_octree(path).num_voxels() == 0);
+}
+
+TEST_CASE("octomap_tree.malformed files throw io::Error naming the file") {
+  const OccupancyMap<OcKey> map = mixed_map(3);
+  const std::string good_bt = io::encode_bt(map), good_ot = io::encode_ot(map);
+  const std::size_t bt_data = good_bt.find("data\n") + 5, ot_data = good_ot.find("data\n") + 5;
+  const std::string header_bt = good_bt.substr(0, bt_data);
+  auto expect_error = [&](const std::string& name, const std::string& bytes,
+                          const std::string& needle, bool inspect_fails = true) {
+    CAPTURE(name);
+    const std::string path = scratch(name);
+    spit(path, bytes);
+    try {
+      (void)io::read_octree(path);
+      FAIL("no error for " << name);
+    } catch (const io::Error& e) {
+      CHECK(e.file() == path);
+      CHECK_MESSAGE(e.problem().find(needle) != std::string::npos, e.problem());
+    }
+    if (!inspect_fails) return;  // a limit of reading, not a malformed file
+    try {
+      (void)io::inspect_octree(path);
+      FAIL("inspect: no error for " << name);
+    } catch (const io::Error& e) {
+      CHECK(e.file() == path);
+    }
+  };
+  auto replace = [](std::string s, const std::string& from, const std::string& to) {
+    s.replace(s.find(from), from.size(), to);
+    return s;
+  };
+  expect_error("truncated.bt", good_bt.substr(0, good_bt.size() - 7), "truncated");
+  expect_error("truncated.ot", good_ot.substr(0, ot_data + 12), "truncated");
+  expect_error("header_only.bt", header_bt, "truncated");
+  expect_error("trailing.bt", good_bt + "xyz", "unexpected bytes");
+  expect_error("not_octomap.bt", "ply\nformat ascii 1.0\n", "not an OctoMap file");
+  expect_error("no_data.bt", replace(header_bt, "data\n", ""), "no 'data' line");
+  expect_error("no_res.ot", replace(good_ot, "res 0.05\n", ""), "no 'res' line");
+  expect_error("zero_res.bt", replace(good_bt, "res 0.05", "res 0"), "invalid resolution");
+  expect_error("nan_res.bt", replace(good_bt, "res 0.05", "res nan"), "invalid resolution");
+  expect_error("text_size.bt", replace(good_bt, "size ", "size x"), "invalid node count");
+  expect_error("huge_size.bt", replace(good_bt, "size ", "size 9"), "but the tree has");
+  expect_error("bad_id.ot", replace(good_ot, "id OcTree", "id CountingOcTree"),
+               "unsupported OctoMap tree type");
+  expect_error("keyword.bt", replace(good_bt, "id OcTree", "colour red"), "unknown header keyword");
+
+  // Hand-built node streams.
+  const std::string bt_head = std::string(io::detail::kBtFirstLine) + "\n";
+  const std::string ot_head = std::string(io::detail::kOtFirstLine) + "\n";
+  // Root with 8 free leaves at depth 1: 2^48 finest voxels claimed by 2 bytes of data.
+  expect_error("absurd.bt", bt_head + "id OcTree\nsize 9\nres 0.1\ndata\n\x55\x55",
+               "OctreeReadOptions::max_voxels", false);
+  // A chain of "has children" down to depth 16 and one level further.
+  std::string chain;
+  for (int d = 0; d < 16; ++d) chain += std::string("\x03\x00", 2);
+  expect_error("too_deep.bt", bt_head + "id OcTree\nsize 17\nres 0.1\ndata\n" + chain, "depth 16");
+  // .ot root holding NaN.
+  const float nan = std::nanf("");
+  std::string nan_node(5, '\0');
+  std::memcpy(&nan_node[0], &nan, 4);
+  expect_error("nan.ot", ot_head + "id OcTree\nsize 1\nres 0.1\ndata\n" + nan_node, "non-finite");
+  // More nodes than the size line: stops at the claim.
+  expect_error("short_size.ot", replace(good_ot, "size ", "size 1"), "");
+}
+
+TEST_CASE("octomap_tree.max_voxels bounds the expansion of pruned leaves") {
+  OccupancyMap<OcKey> map(0.1);
+  for (std::uint16_t x = 0; x < 16; ++x)
+    for (std::uint16_t y = 0; y < 16; ++y)
+      for (std::uint16_t z = 0; z < 16; ++z)
+        map.set(OcKey(static_cast<std::uint16_t>(32768 + x), static_cast<std::uint16_t>(32768 + y),
+                      static_cast<std::uint16_t>(32768 + z)),
+                2.0f);
+  const std::string path = scratch("cube.bt");
+  io::write_bt(path, map);
+  const io::OctreeInfo info = io::inspect_octree(path);
+  CHECK(info.min_leaf_depth == 12);  // one leaf of 16^3 voxels
+  CHECK(info.occupied_leaves == 1);
+  CHECK(info.nodes == 13);
+  io::OctreeReadOptions small;
+  small.max_voxels = 4095;
+  CHECK_THROWS_AS(io::read_octree(path, small), io::Error);
+  small.max_voxels = 4096;
+  const auto back = io::read_octree(path, small);
+  CHECK(back.num_voxels() == 4096);
+  CHECK(back.num_bricks() == 8);
+}
+
+#if KNNOCC_HAVE_OCTOMAP
+namespace {
+
+// liboctomap's leaves, expanded to finest voxels, against our map (value compared exactly when
+// `values`, else by occupancy class).
+void check_octomap_sees(const octomap::OcTree& tree, const OccupancyMap<OcKey>& ours, bool values) {
+  std::size_t finest = 0, wrong = 0, occupied = 0;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const int span = 1 << (16 - static_cast<int>(it.getDepth()));
+    const octomap::OcTreeKey base = it.getIndexKey();
+    for (int dx = 0; dx < span; ++dx)
+      for (int dy = 0; dy < span; ++dy)
+        for (int dz = 0; dz < span; ++dz) {
+          ++finest;
+          occupied += tree.isNodeOccupied(*it);
+          const auto got = ours.logodds(OcKey(static_cast<std::uint16_t>(base[0] + dx),
+                                              static_cast<std::uint16_t>(base[1] + dy),
+                                              static_cast<std::uint16_t>(base[2] + dz)));
+          if (!got) {
+            ++wrong;
+          } else if (values) {
+            wrong += *got != it->getLogOdds();
+          } else {
+            wrong += ours.is_occupied(*got) != tree.isNodeOccupied(*it);
+          }
+        }
+  }
+  const auto counts = ours.count_voxels();
+  MESSAGE("liboctomap sees " << tree.getNumLeafNodes() << " leaves, " << finest
+                             << " finest voxels (" << occupied << " occupied)");
+  CHECK(wrong == 0);
+  CHECK(finest == ours.num_voxels());
+  CHECK(occupied == counts.occupied);
+}
+
+std::string octomap_bytes(octomap::OcTree& tree, bool binary) {
+  std::ostringstream s;
+  if (binary)
+    tree.writeBinary(s);  // makes the tree max-likelihood and prunes it
+  else
+    tree.write(s);
+  return s.str();
+}
+
+}  // namespace
+
+TEST_CASE("octomap_tree.liboctomap writes the same bytes and reads ours (scan.dat)") {
+  const std::string path = knnocc::test::scan_dat_path();
+  if (path.empty()) {
+    MESSAGE("skipped: scan.dat not available (needs ../shared/data and the ctest fixture)");
+    return;
+  }
+  const auto points = io::read_xyz(path).points;
+  OccupancyMap<OcKey> map(0.1);
+  knnocc::ScanInserter<OcKey>(map).insert_point_cloud(Point3f{}, points, -1.0, false);
+
+  octomap::OcTree tree(0.1);
+  octomap::Pointcloud pc;
+  for (const auto& p : points) pc.push_back(p.x, p.y, p.z);
+  tree.insertPointCloud(pc, octomap::point3d(0, 0, 0));
+  CHECK(tree.size() == 407411);  // ../shared/data/README.md
+
+  const std::string ot = io::encode_ot(map);
+  CHECK(ot.find("size 407411\n") != std::string::npos);
+  CHECK(ot == octomap_bytes(tree, false));
+  const std::string bt = io::encode_bt(map);
+  CHECK(bt == octomap_bytes(tree, true));
+
+  // liboctomap reads our files and sees our leaves.
+  const std::string ot_path = scratch("scan_dat.ot"), bt_path = scratch("scan_dat.bt");
+  io::write_ot(ot_path, map);
+  io::write_bt(bt_path, map);
+  {
+    std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(ot_path));
+    auto* t = dynamic_cast<octomap::OcTree*>(read.get());
+    REQUIRE(t != nullptr);
+    CHECK(t->size() == 407411);
+    check_octomap_sees(*t, map, true);
+  }
+  {
+    octomap::OcTree t(0.1);
+    REQUIRE(t.readBinary(bt_path));
+    CHECK(t.getNumLeafNodes() > 0);
+    check_octomap_sees(t, map, false);
+  }
+}
+
+TEST_CASE("octomap_tree.liboctomap agrees on mixed maps, pruning included") {
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    CAPTURE(seed);
+    const OccupancyMap<OcKey> map = mixed_map(seed);
+    octomap::OcTree tree(0.05);
+    map.for_each_voxel([&](const OcKey& k, float v) {
+      tree.setNodeValue(octomap::OcTreeKey(k[0], k[1], k[2]), v);
+    });
+    CHECK(io::encode_ot(map) == octomap_bytes(tree, false));
+    CHECK(io::encode_bt(map) == octomap_bytes(tree, true));
+  }
+}
+
+TEST_CASE("octomap_tree.reads liboctomap's ColorOcTree and OcTreeStamped files") {
+  octomap::ColorOcTree color(0.1);
+  knnocc::test::Rng rng(5);
+  std::uniform_real_distribution<float> u(-2.f, 2.f);
+  for (int i = 0; i < 500; ++i) {
+    const octomap::point3d p(u(rng), u(rng), u(rng));
+    color.updateNode(p, i % 3 != 0);
+    color.setNodeColor(color.coordToKey(p), 10, 20, 30);
+  }
+  const std::string path = scratch("color.ot");
+  REQUIRE(color.write(path));
+  const auto map = io::read_octree(path);
+  std::size_t leaves = 0, wrong = 0;
+  for (auto it = color.begin_leafs(), end = color.end_leafs(); it != end; ++it) {
+    ++leaves;
+    const auto v =
+        map.logodds_at_depth(OcKey(it.getIndexKey()[0], it.getIndexKey()[1], it.getIndexKey()[2]),
+                             static_cast<int>(it.getDepth()));
+    wrong += !v || *v != it->getLogOdds();
+  }
+  CHECK(leaves > 100);
+  CHECK(wrong == 0);
+
+  octomap::OcTreeStamped stamped(0.1);
+  for (int i = 0; i < 300; ++i) stamped.updateNode(octomap::point3d(u(rng), u(rng), u(rng)), true);
+  const std::string spath = scratch("stamped.ot");
+  REQUIRE(stamped.write(spath));
+  CHECK(io::read_octree(spath).num_voxels() == stamped.getNumLeafNodes());
+}
+#endif

@@ -1,0 +1,312 @@
+// PCD files (ascii, binary, binary_compressed) and the LZF codec: round trips, hand-built byte
+// streams decoded against values derived from the format description, and malformed files.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <knnocc/io/detail/lzf.hpp>
+#include <knnocc/io/pcd.hpp>
+#include <knnocc/io/point_file.hpp>
+
+#include "test_support.hpp"
+
+namespace io = knnocc::io;
+using knnocc::Point3f;
+
+namespace {
+
+std::string scratch(const std::string& name) {
+  return (knnocc::test::scratch_dir("pcd") / name).string();
+}
+
+void spit(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+template <class T>
+void put(std::string& s, T v) {  // little-endian on every host
+  char b[sizeof(T)];
+  io::detail::store_le(b, v);
+  s.append(b, sizeof(T));
+}
+
+std::string decode(const std::vector<unsigned char>& in, std::size_t n, std::string& problem) {
+  std::string out(n, '\0');
+  problem = io::detail::lzf_decompress(in.data(), in.size(),
+                                       reinterpret_cast<unsigned char*>(&out[0]), n);
+  return out;
+}
+
+bool same_point(const Point3f& a, const Point3f& b) {
+  auto eq = [](float x, float y) { return (std::isnan(x) && std::isnan(y)) || x == y; };
+  return eq(a.x, b.x) && eq(a.y, b.y) && eq(a.z, b.z);
+}
+
+void check_error(const std::string& name, const std::string& bytes, const std::string& needle) {
+  CAPTURE(name);
+  const std::string path = scratch(name);
+  spit(path, bytes);
+  knnocc::test::reset_largest_allocation();
+  try {
+    (void)io::read_pcd(path);
+    FAIL("no error");
+  } catch (const io::Error& e) {
+    // Nothing near what a lying header claims: at most the file and a few small vectors.
+    const std::size_t largest = knnocc::test::largest_allocation();
+    CHECK(largest < bytes.size() + 4096);
+    CHECK(e.file() == path);
+    CHECK_MESSAGE(e.problem().find(needle) != std::string::npos, e.problem());
+  }
+}
+
+const std::string kXyzHeader =
+    "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n";
+
+}  // namespace
+
+TEST_CASE("lzf.hand-built stream decodes as the format says") {
+  // literal "abcd", then a reference of 12 bytes at distance 4 (length 12 -> 7 + 3),
+  // literal "xy", then a 4-byte reference at distance 2 (overlapping copy).
+  const std::vector<unsigned char> in = {0x03, 'a',  'b', 'c', 'd',  0xE0, 0x03,
+                                         0x03, 0x01, 'x', 'y', 0x40, 0x01};
+  std::string problem;
+  CHECK(decode(in, 22, problem) == "abcdabcdabcdabcdxyxyxy");
+  CHECK(problem.empty());
+  decode(in, 21, problem);
+  CHECK(problem.find("more bytes than declared") != std::string::npos);
+  decode(in, 23, problem);
+  CHECK(problem.find("decodes to 22 bytes") != std::string::npos);
+  decode({0x20, 0x05}, 3, problem);  // a reference before anything was written
+  CHECK(problem.find("before the start") != std::string::npos);
+  decode({0x05, 'a', 'b'}, 6, problem);  // literal run cut off
+  CHECK(problem.find("past the end") != std::string::npos);
+  decode({0x00, 'a', 0xE0}, 10, problem);  // long reference cut off
+  CHECK(problem.find("cut off") != std::string::npos);
+}
+
+TEST_CASE("lzf.compress then decompress is the identity") {
+  knnocc::test::Rng rng(11);
+  std::vector<std::vector<unsigned char>> inputs = {{}, {7}, {1, 2}, {1, 2, 3}};
+  std::vector<unsigned char> runs(100000, 0x55);  // long runs: references of 264 bytes
+  inputs.push_back(runs);
+  std::vector<unsigned char> noise(50000);
+  for (auto& b : noise) b = static_cast<unsigned char>(rng());
+  inputs.push_back(noise);
+  std::vector<unsigned char> far(30000);  // repeats at distances around the 8192 limit
+  for (std::size_t i = 0; i < far.size(); ++i)
+    far[i] = i < 8190 ? static_cast<unsigned char>(rng()) : far[i - 8190 - (i % 5)];
+  inputs.push_back(far);
+  std::vector<unsigned char> floats(4 * 30000);  // float coordinates of a smooth surface
+  for (std::size_t i = 0; i < 30000; ++i) {
+    const float v = std::floor(static_cast<float>(i) / 7.0f) * 0.05f;
+    std::memcpy(&floats[4 * i], &v, 4);
+  }
+  inputs.push_back(floats);
+  for (const auto& in : inputs) {
+    CAPTURE(in.size());
+    const auto packed = io::detail::lzf_compress(in.data(), in.size());
+    std::vector<unsigned char> out(in.size());
+    CHECK(io::detail::lzf_decompress(packed.data(), packed.size(), out.data(), out.size()) == "");
+    CHECK(out == in);
+    CHECK(in.size() <= packed.size() * io::detail::kLzfMaxRatio);
+  }
+  CHECK(io::detail::lzf_compress(runs.data(), runs.size()).size() < 1500);
+}
+
+TEST_CASE("pcd.round trip in every format, with ids and NaN") {
+  knnocc::test::Rng rng(3);
+  std::uniform_real_distribution<float> u(-50.f, 50.f);
+  std::vector<Point3f> pts(5000);
+  std::vector<std::uint64_t> ids(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    pts[i] = {u(rng), u(rng), std::round(u(rng))};
+    ids[i] = 4000000000u - i * 7;
+  }
+  pts[17].x = std::nanf("");
+  pts[18].z = -std::numeric_limits<float>::infinity();
+  for (const io::PcdData data :
+       {io::PcdData::ascii, io::PcdData::binary, io::PcdData::binary_compressed}) {
+    for (const bool with_ids : {false, true}) {
+      CAPTURE(static_cast<int>(data));
+      CAPTURE(with_ids);
+      const std::string path = scratch("round.pcd");
+      io::write_pcd(path, pts, with_ids ? &ids : nullptr, data);
+      io::PcdInfo info;
+      knnocc::test::reset_largest_allocation();
+      const io::Cloud back = io::read_pcd(path, &info);
+      // The allocation counter of the malformed-file test does see real buffers.
+      CHECK(knnocc::test::largest_allocation() >= pts.size() * sizeof(Point3f));
+      CHECK(info.data == data);
+      CHECK(info.points == pts.size());
+      CHECK(info.width == pts.size());
+      CHECK(info.height == 1);
+      REQUIRE(back.points.size() == pts.size());
+      std::size_t differing = 0;
+      for (std::size_t i = 0; i < pts.size(); ++i) differing += !same_point(back.points[i], pts[i]);
+      CHECK(differing == 0);
+      CHECK(back.ids == (with_ids ? ids : std::vector<std::uint64_t>{}));
+      // read_points dispatches .pcd here too.
+      CHECK(io::read_points(path).points.size() == pts.size());
+    }
+  }
+  const std::string empty = scratch("empty.pcd");
+  for (const io::PcdData data :
+       {io::PcdData::ascii, io::PcdData::binary, io::PcdData::binary_compressed}) {
+    io::write_pcd(empty, {}, nullptr, data);
+    CHECK(io::read_pcd(empty).points.empty());
+  }
+}
+
+TEST_CASE("pcd.hand-built binary_compressed file with mixed fields") {
+  // Two points; fields x (F4), rgb (U1 x3), y (F8), _ (2 bytes padding), z (F4), id (U2).
+  // Stored field after field: x0 x1 | rgb0 rgb1 | y0 y1 | pad pad | z0 z1 | id0 id1.
+  std::string raw;
+  put(raw, 1.5f);
+  put(raw, -2.25f);
+  raw += "\x01\x02\x03\x04\x05\x06";
+  put(raw, 10.0);
+  put(raw, 1e300);  // narrows to +inf
+  raw += std::string(4, '\x7f');
+  put(raw, 0.0f);
+  put(raw, 3.0f);
+  put(raw, std::uint16_t{65535});
+  put(raw, std::uint16_t{9});
+  REQUIRE(raw.size() == 46);
+  // LZF by hand: one literal run of 32 bytes, one of 16.
+  std::string lzf;
+  lzf += static_cast<char>(31);
+  lzf += raw.substr(0, 32);
+  lzf += static_cast<char>(13);
+  lzf += raw.substr(32);
+  std::string file =
+      "VERSION .7\nFIELDS x rgb y _ z id\nSIZE 4 1 8 1 4 2\nTYPE F U F U F U\n"
+      "COUNT 1 3 1 2 1 1\nWIDTH 1\nHEIGHT 2\nVIEWPOINT 1 2 3 0 1 0 0\nPOINTS 2\n"
+      "DATA binary_compressed\n";
+  put(file, static_cast<std::uint32_t>(lzf.size()));
+  put(file, static_cast<std::uint32_t>(raw.size()));
+  file += lzf;
+  const std::string path = scratch("mixed.pcd");
+  spit(path, file);
+  io::PcdInfo info;
+  const io::Cloud c = io::read_pcd(path, &info);
+  REQUIRE(c.points.size() == 2);
+  CHECK(same_point(c.points[0], {1.5f, 10.0f, 0.0f}));
+  CHECK(c.points[1].x == -2.25f);
+  CHECK(std::isinf(c.points[1].y));
+  CHECK(c.points[1].z == 3.0f);
+  CHECK(c.ids == std::vector<std::uint64_t>{65535, 9});
+  CHECK(info.height == 2);
+  CHECK(info.viewpoint[0] == 1.0);
+  CHECK(info.viewpoint[4] == 1.0);
+  CHECK(info.fields == std::vector<std::string>{"x", "rgb", "y", "_", "z", "id"});
+
+  // The same cloud as "binary": records packed point after point.
+  std::string bin = file.substr(0, file.find("DATA")) + "DATA binary\n";
+  for (int i = 0; i < 2; ++i) {
+    bin += raw.substr(4 * i, 4);
+    bin += raw.substr(8 + 3 * i, 3);
+    bin += raw.substr(14 + 8 * i, 8);
+    bin += raw.substr(30 + 2 * i, 2);
+    bin += raw.substr(34 + 4 * i, 4);
+    bin += raw.substr(42 + 2 * i, 2);
+  }
+  spit(path, bin);
+  const io::Cloud b = io::read_pcd(path);
+  REQUIRE(b.points.size() == 2);
+  CHECK(same_point(b.points[0], c.points[0]));
+  CHECK(same_point(b.points[1], c.points[1]));
+  CHECK(b.ids == c.ids);
+}
+
+TEST_CASE("pcd.ascii with extra fields, counts and an organised cloud") {
+  const std::string path = scratch("ascii.pcd");
+  spit(path,
+       "# comment\nFIELDS normal_x x y z rgb curvature\nSIZE 4 4 4 8 4 4\nTYPE F F F F F F\n"
+       "COUNT 3 1 1 1 1 1\nWIDTH 2\nHEIGHT 2\nPOINTS 4\nDATA ascii\n"
+       "0 0 1 1.5 2.5 3.5 4.2e6 0.1\n"
+       "0 0 1 nan nan nan 0 0\r\n"
+       "\n"
+       "9 9 9 -1 -2 -3 0 0\n"
+       "1 1 1 7 8 9 0 0");
+  const io::Cloud c = io::read_pcd(path);
+  REQUIRE(c.points.size() == 4);
+  CHECK(same_point(c.points[0], {1.5f, 2.5f, 3.5f}));
+  CHECK(std::isnan(c.points[1].x));
+  CHECK(same_point(c.points[2], {-1.f, -2.f, -3.f}));
+  CHECK(same_point(c.points[3], {7.f, 8.f, 9.f}));
+  CHECK(c.ids.empty());
+}
+
+TEST_CASE("pcd.malformed files throw io::Error naming the file, without huge allocations") {
+  const std::string ok_ascii =
+      kXyzHeader + "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n1 2 3\n4 5 6\n";
+  check_error("notpcd.pcd", "ply\nformat ascii 1.0\n", "not a PCD file");
+  check_error("empty.pcd", "", "empty file");
+  check_error("nodata.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\n", "no DATA line");
+  check_error("baddata.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA binary_lz4\n",
+              "unknown DATA type");
+  check_error("nofields.pcd", "VERSION 0.7\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n",
+              "no FIELDS line");
+  check_error("sizes.pcd",
+              "FIELDS x y z\nSIZE 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n",
+              "SIZE has 2");
+  check_error("counts.pcd",
+              "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1\nWIDTH 1\nHEIGHT 1\nDATA ascii\n",
+              "COUNT has 2");
+  check_error("type.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F D\nWIDTH 1\nHEIGHT 1\nDATA ascii\n",
+              "unknown TYPE 'D'");
+  check_error("size3.pcd", "FIELDS x y z\nSIZE 4 4 3\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n",
+              "invalid SIZE '3'");
+  check_error("intx.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE I F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n",
+              "'x' must be a float scalar");
+  check_error("noz.pcd", "FIELDS x y\nSIZE 4 4\nTYPE F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2\n",
+              "no field 'z'");
+  check_error("points.pcd", kXyzHeader + "WIDTH 2\nHEIGHT 2\nPOINTS 3\nDATA ascii\n",
+              "!= POINTS 3");
+  check_error("negative.pcd", kXyzHeader + "WIDTH -2\nHEIGHT 1\nDATA ascii\n",
+              "non-negative integer");
+  check_error("fewlines.pcd",
+              kXyzHeader + "WIDTH 3\nHEIGHT 1\nPOINTS 3\nDATA ascii\n1.0 2.0 3.0\n4.0 5.0 6.0\n",
+              "POINTS 3 but 2 data lines");
+  check_error("manylines.pcd", ok_ascii + "7 8 9\n", "more data lines than POINTS");
+  check_error("tokens.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA ascii\n1.000 2.000\n",
+              "expected 3 values, found 2");
+  check_error("word.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA ascii\n1 two 3\n",
+              "line 10: cannot parse 'two'");
+  // Absurd sizes behind tiny files: never believed.
+  check_error("huge_ascii.pcd", kXyzHeader + "WIDTH 4000000000\nHEIGHT 1000\nDATA ascii\n1 2 3\n",
+              "file truncated");
+  std::string bin = kXyzHeader + "WIDTH 1000000000\nHEIGHT 1\nDATA binary\n";
+  bin.append(30, '\0');
+  check_error("huge_binary.pcd", bin, "file truncated: POINTS 1000000000");
+  std::string comp = kXyzHeader + "WIDTH 300000000\nHEIGHT 1\nDATA binary_compressed\n";
+  put(comp, std::uint32_t{2});
+  put(comp, std::uint32_t{3600000000u});
+  comp += std::string("\x00\x01", 2);
+  check_error("huge_compressed.pcd", comp, "cannot hold the declared 3600000000 bytes");
+  std::string lying = kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA binary_compressed\n";
+  put(lying, std::uint32_t{1000});
+  put(lying, std::uint32_t{12});
+  lying += "abc";
+  check_error("short_compressed.pcd", lying, "compressed block of 1000 bytes");
+  std::string mismatch = kXyzHeader + "WIDTH 2\nHEIGHT 1\nDATA binary_compressed\n";
+  put(mismatch, std::uint32_t{1});
+  put(mismatch, std::uint32_t{12});
+  mismatch += '\0';
+  check_error("mismatch.pcd", mismatch, "POINTS 2 x 12 bytes per point differ");
+  std::string corrupt = kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA binary_compressed\n";
+  put(corrupt, std::uint32_t{3});
+  put(corrupt, std::uint32_t{12});
+  corrupt += std::string("\x00\x41\x20", 3);  // "A", then a reference 2 bytes back
+  check_error("corrupt.pcd", corrupt, "corrupt binary_compressed data");
+  check_error("nosizes.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA binary_compressed\nab",
+              "no compressed-data sizes");
+}

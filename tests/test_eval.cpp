@@ -9,6 +9,7 @@
 
 #include <knnocc/eval/metrics.hpp>
 #include <knnocc/eval/reference.hpp>
+#include <knnocc/io/octomap_tree.hpp>
 
 #include "test_support.hpp"
 
@@ -188,4 +189,33 @@ TEST_CASE("eval: reference files round-trip; malformed ones name the file and li
   fails("ground 0\nground 1\ncuboid 0 0 0 1 1 1\n", "second ground");
   fails("# nothing\n", "no ellipsoid or cuboid");
   fails("cuboid 0 0 0 1 1 x\n", "line 1");
+}
+
+TEST_CASE("eval: a map written as .bt/.ot and read back evaluates the same") {
+  const eval::Reference ref = tree_like();
+  OccupancyMap<OcKey> map(0.1);
+  test::Rng rng(5);
+  std::uniform_real_distribution<double> u(-1.5, 1.5), uz(0.0, 2.5);
+  for (int i = 0; i < 3000; ++i) {
+    OcKey k;
+    REQUIRE(map.grid().coord_to_key(u(rng), u(rng), uz(rng), k));
+    map.set(k, (rng() % 2) ? 1.2f : -0.8f);
+  }
+  const eval::Metrics want = eval::evaluate(map, ref);
+  const auto dir = test::scratch_dir("eval");
+  for (const char* name : {"m.bt", "m.ot"}) {
+    const std::string path = (dir / name).string();
+    if (std::string(name) == "m.bt")
+      io::write_bt(path, map);
+    else
+      io::write_ot(path, map);
+    const eval::Metrics got = eval::evaluate(io::read_octree(path), ref);
+    CAPTURE(name);
+    CHECK(got.occupied == want.occupied);
+    CHECK(got.free == want.free);
+    CHECK(got.in_shell == want.in_shell);
+    CHECK(got.covered == want.covered);
+    CHECK(got.irrelevant == want.irrelevant);
+    CHECK(got.free_inside == want.free_inside);
+  }
 }

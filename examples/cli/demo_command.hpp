@@ -14,7 +14,8 @@
 
 #include <knnocc/eval/metrics.hpp>
 #include <knnocc/eval/reference.hpp>
-#include <knnocc/io/ply.hpp>
+#include <knnocc/io/octomap_tree.hpp>
+#include <knnocc/io/voxel_export.hpp>
 #include <knnocc/io/voxel_list.hpp>
 #include <knnocc/mapper.hpp>
 #include <knnocc/sensor/knn_model.hpp>
@@ -22,6 +23,7 @@
 
 #include "args.hpp"
 #include "map_command.hpp"
+#include "map_picture.hpp"
 #include "room_demo.hpp"
 
 namespace knnocc::cli {
@@ -38,8 +40,10 @@ Prints one row per seed and model, then Table 1 as mean and standard deviation o
 and the k-NN model's figures relative to the OctoMap model's.
   --seeds N        how many seeds (default 5), starting at --first-seed (default 1)
   --out DIR        also write, for the first seed: the sequence folder (DIR/scene), the reference
-                   (DIR/scene/reference.txt) and both maps as voxel lists (DIR/<model>.voxels) and
-                   as PLY points of the occupied voxels (DIR/<model>_occupied.ply)
+                   (DIR/scene/reference.txt) and both maps (<model> = octomap, knn) as OctoMap
+                   binary trees for octovis (DIR/<model>.bt), voxel lists (DIR/<model>.voxels),
+                   occupied voxels as PLY cubes coloured by height (DIR/<model>_occupied.ply)
+                   and top/side pictures (DIR/<model>.png)
 )";
 }
 
@@ -58,19 +62,20 @@ Row run_model(const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& r
   std::sort(us.begin(), us.end());
   Row row{eval::evaluate(mapper.map(), ref), us.empty() ? 0.0 : us[us.size() / 2] / 1000.0};
   if (!out_dir.empty()) {
-    const auto& g = mapper.map().grid();
+    const auto& map = mapper.map();
+    const auto& g = map.grid();
     std::vector<io::VoxelRecord> voxels;
-    std::vector<Point3f> occupied;
-    mapper.map().for_each_voxel([&](const OcKey& k, float v) {
-      const double x = g.index_to_coord(k[0]), y = g.index_to_coord(k[1]),
-                   z = g.index_to_coord(k[2]);
-      voxels.push_back({x, y, z, v});
-      if (mapper.map().is_occupied(v))
-        occupied.push_back({static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
+    map.for_each_voxel([&](const OcKey& k, float v) {
+      voxels.push_back({g.index_to_coord(k[0]), g.index_to_coord(k[1]), g.index_to_coord(k[2]), v});
     });
     const std::filesystem::path dir(out_dir);
-    io::write_voxel_list((dir / (std::string(name) + ".voxels")).string(), std::move(voxels));
-    io::write_ply((dir / (std::string(name) + "_occupied.ply")).string(), occupied);
+    const std::string base = (dir / name).string();
+    io::write_voxel_list(base + ".voxels", std::move(voxels));
+    io::write_bt(base + ".bt", map);
+    io::VoxelExportOptions cubes;
+    cubes.shape = io::VoxelShape::cubes;
+    io::write_voxels_ply(base + "_occupied.ply", map, cubes);
+    write_map_png(base + ".png", map);
   }
   return row;
 }
@@ -199,8 +204,8 @@ inline int run_demo(const std::vector<std::string>& argv) {
       irr_pct, irr_pct <= 10.0 ? "met" : "NOT met", shell_pct,
       shell_pct >= 97.0 ? "met" : "NOT met", points, outliers, seconds);
   if (!out.empty())
-    std::printf("wrote %s/{octomap,knn}.voxels, %s/{octomap,knn}_occupied.ply, %s/scene/\n",
-                out.c_str(), out.c_str(), out.c_str());
+    std::printf("wrote %s/{octomap,knn}{.bt,.voxels,_occupied.ply,.png} and %s/scene/\n",
+                out.c_str(), out.c_str());
   return 0;
 }
 

@@ -9,6 +9,7 @@
 #include <knnocc/eval/metrics.hpp>
 #include <knnocc/eval/reference.hpp>
 #include <knnocc/io/error.hpp>
+#include <knnocc/io/octomap_tree.hpp>
 #include <knnocc/io/voxel_list.hpp>
 #include <knnocc/map/occupancy_map.hpp>
 
@@ -17,10 +18,10 @@
 namespace knnocc::cli {
 
 inline const char* eval_help() {
-  return R"(usage: knnocc eval --map FILE --reference FILE --res R [--inflate M] [--ground-band M]
+  return R"(usage: knnocc eval --map FILE --reference FILE [--res R] [--inflate M] [--ground-band M]
 
-Compares a map (a voxel list from `knnocc map --out-voxels`: x y z logodds per finest voxel;
-occupied = logodds >= 0) with reference shapes (`reference.txt` from `knnocc sim`: ground,
+Compares a map (an OctoMap .bt/.ot file, or a voxel list from `knnocc map --out-voxels`: x y z
+logodds per finest voxel, which needs --res; occupied = logodds >= 0) with reference shapes (`reference.txt` from `knnocc sim`: ground,
 ellipsoid and cuboid lines) and prints the paper's Table 1 metrics on one line:
   occupied N free N shell N in_shell N covered N irrelevant N evaluated N
   precision X shell_recall X free_inside N
@@ -35,26 +36,10 @@ ellipsoid and cuboid lines) and prints the paper's Table 1 metrics on one line:
 )";
 }
 
-inline int run_eval(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--map", "--reference", "--res", "--inflate", "--ground-band"}, {});
-  if (args.help()) {
-    std::fputs(eval_help(), stdout);
-    return 0;
-  }
-  const std::string map_path = args.required("--map");
-  const std::string ref_path = args.required("--reference");
-  if (!args.has("--res")) throw UsageError("--res is required (the map's voxel size)");
-  const double res = args.number("--res", 0.0);
-  if (!(res >= 1e-4)) throw UsageError("--res must be >= 0.0001, got " + args.str("--res"));
-  eval::MetricOptions opt;
-  opt.inflate = args.number("--inflate", opt.inflate);
-  opt.ground_band = args.number("--ground-band", opt.ground_band);
-  if (!(opt.inflate >= 0) || !(opt.ground_band >= 0))
-    throw UsageError("--inflate and --ground-band must be >= 0");
-
-  const eval::Reference ref = eval::read_reference(ref_path);
+// A voxel list as a map at resolution res; every line must be a voxel centre of that grid.
+inline OccupancyMap<OcKey> read_voxel_map(const std::string& path, double res) {
   OccupancyMap<OcKey> map(res);
-  for (const io::VoxelRecord& v : io::read_voxel_list(map_path)) {
+  for (const io::VoxelRecord& v : io::read_voxel_list(path)) {
     OcKey k;
     if (!map.grid().coord_to_key(v.x, v.y, v.z, k) ||
         std::fabs(map.grid().index_to_coord(k[0]) - v.x) > 1e-3 * res ||
@@ -64,10 +49,40 @@ inline int run_eval(const std::vector<std::string>& argv) {
       std::snprintf(text, sizeof text,
                     "(%.6f %.6f %.6f) is not a voxel centre at --res %g (wrong --res?)", v.x, v.y,
                     v.z, res);
-      throw io::Error(map_path, text);
+      throw io::Error(path, text);
     }
     map.set(k, v.logodds);
   }
+  return map;
+}
+
+inline int run_eval(const std::vector<std::string>& argv) {
+  const Args args(argv, {"--map", "--reference", "--res", "--inflate", "--ground-band"}, {});
+  if (args.help()) {
+    std::fputs(eval_help(), stdout);
+    return 0;
+  }
+  const std::string map_path = args.required("--map");
+  const std::string ref_path = args.required("--reference");
+  eval::MetricOptions opt;
+  opt.inflate = args.number("--inflate", opt.inflate);
+  opt.ground_band = args.number("--ground-band", opt.ground_band);
+  if (!(opt.inflate >= 0) || !(opt.ground_band >= 0))
+    throw UsageError("--inflate and --ground-band must be >= 0");
+  const std::string ext = map_path.size() >= 3 ? map_path.substr(map_path.size() - 3) : "";
+  const bool tree = ext == ".bt" || ext == ".ot";
+  if (!tree && !args.has("--res"))
+    throw UsageError("--res is required for a voxel list (the map's voxel size)");
+  const double res = args.number("--res", 0.0);
+  if (args.has("--res") && !(res >= 1e-4))
+    throw UsageError("--res must be >= 0.0001, got " + args.str("--res"));
+
+  const eval::Reference ref = eval::read_reference(ref_path);
+  const OccupancyMap<OcKey> map = tree ? io::read_octree(map_path) : read_voxel_map(map_path, res);
+  if (tree && args.has("--res") && map.grid().resolution() != res)
+    throw io::Error(map_path, "the tree's resolution is " +
+                                  std::to_string(map.grid().resolution()) + ", not --res " +
+                                  args.str("--res"));
   const eval::Metrics m = eval::evaluate(map, ref, opt);
   std::printf(
       "occupied %zu free %zu shell %zu in_shell %zu covered %zu irrelevant %zu evaluated %zu "

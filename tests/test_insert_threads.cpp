@@ -116,13 +116,9 @@ TEST_CASE("insert_threads.scratch_limit_picks_the_path_not_the_map") {
 }
 
 TEST_CASE("insert_threads.scan_dat") {
-  const std::string path = knnocc::test::scan_dat_path();
-  if (path.empty()) {
-    MESSAGE("skipped: scan.dat not available (needs ../shared/data and the ctest fixture)");
-    return;
-  }
   std::vector<Scan> scans(1);
-  scans[0].points = knnocc::io::read_xyz(path).points;
+  scans[0].points = knnocc::test::scan_dat_points_or_skip();
+  if (scans[0].points.empty()) return;
   const auto one = insert<OcKey>(scans, 0.1, 1, kDefaultLimit);
   CHECK(one.stats[4] == 7066778);  // ray keys, as liboctomap's computeRayKeys
   for (const unsigned threads : {2u, 4u, 8u}) {

@@ -16,6 +16,8 @@
 
 #if KNNOCC_HAVE_OCTOMAP
 #include <octomap/OcTree.h>
+
+#include "octomap_oracle.hpp"
 #endif
 
 using knnocc::OccupancyMap;
@@ -64,27 +66,18 @@ knnocc::VoxelCounts insert_all(OccupancyMap<OcKey>& map, const std::vector<Scan>
 void expect_same_map(const OccupancyMap<OcKey>& ours, const octomap::OcTree& tree) {
   std::size_t finest = 0, occupied = 0, mismatched = 0, missing = 0;
   float worst = 0.0f;
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    const int span = 1 << (16 - static_cast<int>(it.getDepth()));
-    const octomap::OcTreeKey base = it.getIndexKey();
-    const float v = it->getLogOdds();
-    for (int dx = 0; dx < span; ++dx)
-      for (int dy = 0; dy < span; ++dy)
-        for (int dz = 0; dz < span; ++dz) {
-          ++finest;
-          occupied += tree.isNodeOccupied(*it);
-          const auto got = ours.logodds(OcKey(static_cast<std::uint16_t>(base[0] + dx),
-                                              static_cast<std::uint16_t>(base[1] + dy),
-                                              static_cast<std::uint16_t>(base[2] + dz)));
-          if (!got) {
-            ++missing;
-            continue;
-          }
-          const float diff = std::fabs(*got - v);
-          worst = std::max(worst, diff);
-          mismatched += diff > 1e-5f;
-        }
-  }
+  knnocc::test::for_each_octomap_voxel(tree, [&](const OcKey& k, const octomap::OcTreeNode& leaf) {
+    ++finest;
+    occupied += tree.isNodeOccupied(leaf);
+    const auto got = ours.logodds(k);
+    if (!got) {
+      ++missing;
+      return;
+    }
+    const float diff = std::fabs(*got - leaf.getLogOdds());
+    worst = std::max(worst, diff);
+    mismatched += diff > 1e-5f;
+  });
   const auto counts = ours.count_voxels();
   MESSAGE("liboctomap finest voxels: " << occupied << " occupied, " << finest - occupied
                                        << " free; knnocc: " << counts.occupied << " / "
@@ -112,13 +105,9 @@ void octomap_insert(octomap::OcTree& tree, const std::vector<Scan>& scans, doubl
 }  // namespace
 
 TEST_CASE("octomap_reference.fr079_scan") {
-  const std::string path = knnocc::test::scan_dat_path();
-  if (path.empty()) {
-    MESSAGE("skipped: scan.dat not available (needs ../shared/data and the ctest fixture)");
-    return;
-  }
   std::vector<Scan> scans(1);
-  scans[0].points = knnocc::io::read_xyz(path).points;
+  scans[0].points = knnocc::test::scan_dat_points_or_skip();
+  if (scans[0].points.empty()) return;
   REQUIRE(scans[0].points.size() == 88206);
   struct Case {
     double res;

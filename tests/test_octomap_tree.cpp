@@ -24,6 +24,8 @@
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 #include <octomap/OcTreeStamped.h>
+
+#include "octomap_oracle.hpp"
 #endif
 
 namespace io = knnocc::io;
@@ -263,26 +265,17 @@ namespace {
 // `values`, else by occupancy class).
 void check_octomap_sees(const octomap::OcTree& tree, const OccupancyMap<OcKey>& ours, bool values) {
   std::size_t finest = 0, wrong = 0, occupied = 0;
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    const int span = 1 << (16 - static_cast<int>(it.getDepth()));
-    const octomap::OcTreeKey base = it.getIndexKey();
-    for (int dx = 0; dx < span; ++dx)
-      for (int dy = 0; dy < span; ++dy)
-        for (int dz = 0; dz < span; ++dz) {
-          ++finest;
-          occupied += tree.isNodeOccupied(*it);
-          const auto got = ours.logodds(OcKey(static_cast<std::uint16_t>(base[0] + dx),
-                                              static_cast<std::uint16_t>(base[1] + dy),
-                                              static_cast<std::uint16_t>(base[2] + dz)));
-          if (!got) {
-            ++wrong;
-          } else if (values) {
-            wrong += *got != it->getLogOdds();
-          } else {
-            wrong += ours.is_occupied(*got) != tree.isNodeOccupied(*it);
-          }
-        }
-  }
+  knnocc::test::for_each_octomap_voxel(tree, [&](const OcKey& k, const octomap::OcTreeNode& leaf) {
+    ++finest;
+    occupied += tree.isNodeOccupied(leaf);
+    const auto got = ours.logodds(k);
+    if (!got)
+      ++wrong;
+    else if (values)
+      wrong += *got != leaf.getLogOdds();
+    else
+      wrong += ours.is_occupied(*got) != tree.isNodeOccupied(leaf);
+  });
   const auto counts = ours.count_voxels();
   MESSAGE("liboctomap sees " << tree.getNumLeafNodes() << " leaves, " << finest
                              << " finest voxels (" << occupied << " occupied)");
@@ -303,12 +296,8 @@ std::string octomap_bytes(octomap::OcTree& tree, bool binary) {
 }  // namespace
 
 TEST_CASE("octomap_tree.liboctomap writes the same bytes and reads ours (scan.dat)") {
-  const std::string path = knnocc::test::scan_dat_path();
-  if (path.empty()) {
-    MESSAGE("skipped: scan.dat not available (needs ../shared/data and the ctest fixture)");
-    return;
-  }
-  const auto points = io::read_xyz(path).points;
+  const auto points = knnocc::test::scan_dat_points_or_skip();
+  if (points.empty()) return;
   OccupancyMap<OcKey> map(0.1);
   knnocc::ScanInserter<OcKey>(map).insert_point_cloud(Point3f{}, points, -1.0, false);
 

@@ -2,10 +2,15 @@
 // Shared helpers for the test suite: locating the real datasets (skipped when absent) and a
 // deterministic random generator.
 
+#include <doctest/doctest.h>
+
 #include <cstdint>
 #include <filesystem>
 #include <random>
 #include <string>
+#include <vector>
+
+#include <knnocc/io/xyz.hpp>
 
 namespace knnocc::test {
 
@@ -34,6 +39,17 @@ inline std::string scan_dat_path() {
   if (std::filesystem::exists(p)) return p.string();
 #endif
   return {};
+}
+
+/// scan.dat's points (88,206), or empty after a MESSAGE saying why the test is skipped (the data
+/// folder or the ctest fixture that decompresses it is missing).
+inline std::vector<Point3f> scan_dat_points_or_skip() {
+  const std::string path = scan_dat_path();
+  if (path.empty()) {
+    MESSAGE("skipped: scan.dat not available (needs ../shared/data and the ctest fixture)");
+    return {};
+  }
+  return io::read_xyz(path).points;
 }
 
 /// Scratch folder for files a test writes (inside the build tree when known).

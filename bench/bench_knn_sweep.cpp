@@ -1,8 +1,9 @@
 // bench_knn_sweep: the documented sweep behind the k-NN model's default parameters.
 // For every combination of k, w, P_u, P_w and s_limit, the simulated tree scene (the paper's
 // experiment, `knnocc demo`) is mapped over several seeds with the k-NN model and compared with
-// the OctoMap model on the same keyframes. Prints every combination that keeps >= 97 % of the
-// OctoMap model's nodes in the reference shell, best (fewest irrelevant nodes) first.
+// the OctoMap model on the same keyframes. Prints the best --top combinations (default 25) that
+// keep >= 97 % of the OctoMap model's nodes in the reference shell (fewest irrelevant nodes
+// first), how many meet both goals, and the least favourable ones.
 //
 //   build/bin/bench_knn_sweep [--seeds N] [--top N]
 

@@ -111,10 +111,12 @@ TEST_CASE("bad_input: k >= cloud size gives N = 0: weak occupied evidence and no
 
 TEST_CASE_TEMPLATE("bad_input: an endpoint in the sensor's own voxel is occupied, casts nothing",
                    Model, OctoMapModel, KnnModel) {
-  std::vector<Point3d> pts = patch();
-  pts.push_back({0.02, 0.03, 0.21});  // the origin's voxel
+  // Every endpoint in the origin's voxel: that voxel is the whole map (no ray is cast).
+  std::vector<Point3d> pts;
+  for (int i = 0; i < 12; ++i) pts.push_back({0.01 + 0.007 * i, 0.03, 0.21 + 0.005 * (i % 3)});
   Mapper<Model> m(0.1);
   m.insert_keyframe(Point3d{0.05, 0.05, 0.25}, pts);
+  CHECK(m.map().num_voxels() == 1);
   OcKey k;
   REQUIRE(m.map().grid().coord_to_key(0.05, 0.05, 0.25, k));
   REQUIRE(m.map().logodds(k).has_value());
@@ -164,9 +166,14 @@ TEST_CASE("bad_input: a pose quaternion off unit length is normalised (<= 1e-3) 
   }
 }
 
-TEST_CASE("bad_input: a NaN sensor origin inserts nothing") {
-  Mapper<KnnModel> m(0.1);
-  const KeyframeStats ks = m.insert_keyframe(Point3d{kNaN, 0, 0}, patch());
-  CHECK_FALSE(ks.scan.origin_valid);
-  CHECK(m.map().empty());
+TEST_CASE("bad_input: a NaN sensor origin inserts nothing, not even into the map cloud") {
+  for (const double max_range : {-1.0, 10.0}) {
+    Mapper<KnnModel> m(0.1, KnnModel{}, MapperOptions{max_range, false, 1, {}});
+    const KeyframeStats ks = m.insert_keyframe(Point3d{kNaN, 0, 0}, patch());
+    CHECK_FALSE(ks.scan.origin_valid);
+    CHECK(ks.scan.points == patch().size());
+    CHECK(ks.rated == 0);
+    CHECK(m.map().empty());
+    CHECK(m.tracker().size() == 0);
+  }
 }

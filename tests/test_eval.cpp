@@ -219,3 +219,30 @@ TEST_CASE("eval: a map written as .bt/.ot and read back evaluates the same") {
     CHECK(got.free_inside == want.free_inside);
   }
 }
+
+TEST_CASE("eval: the shell count agrees with sampling every voxel of the reference's box") {
+  const eval::Reference ref = tree_like();
+  const Grid<OcKey> grid(0.1);
+  const double r = 0.1;
+  std::size_t sampled = 0;  // voxels with samples inside and outside, centre above the ground
+  for (int x = -13; x < 13; ++x)
+    for (int y = -12; y < 12; ++y)
+      for (int z = -2; z < 25; ++z) {
+        const Point3d c{(x + 0.5) * r, (y + 0.5) * r, (z + 0.5) * r};
+        std::size_t in = 0;
+        for (int i = 0; i <= 4; ++i)
+          for (int j = 0; j <= 4; ++j)
+            for (int l = 0; l <= 4; ++l)
+              in += inside_sampled(
+                  ref, {c.x - r / 2 + r * i / 4, c.y - r / 2 + r * j / 4, c.z - r / 2 + r * l / 4});
+        sampled += in > 0 && in < 125 && c.z > 0;
+      }
+  const std::size_t exact = eval::count_shell(grid, ref);
+  CHECK(exact >= sampled);  // sampling misses voxels that only graze a surface
+  CHECK(exact <= sampled + sampled / 20);
+  CHECK(sampled > 1000);
+  // A reference too large to walk is refused, not walked for hours.
+  eval::Reference huge;
+  huge.cuboids.push_back({{-1000, -1000, 0}, {1000, 1000, 10}});
+  CHECK_THROWS_AS(eval::count_shell(Grid<OcKey>(0.05), huge), std::invalid_argument);
+}

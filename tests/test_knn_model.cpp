@@ -94,6 +94,14 @@ TEST_CASE("knn_model: defined edge cases (N = 0, sigma = 0, NaN s, the probabili
       CHECK_FALSE(model.rate(0.3, d).casts_ray);
     }
   }
+  SUBCASE("equal values that Welford leaves a few ulps apart count as sigma == 0") {
+    RunningNormal d;
+    for (int i = 0; i < 20; ++i) d.add(0.1);  // mean 0.1 + ulps, sigma ~1e-17, not exactly 0
+    CHECK(d.sigma() < 1e-15);
+    CHECK(model.probability(0.1, d) == doctest::Approx(0.8 - 0.5 / phi_w * 0.2).epsilon(1e-9));
+    CHECK(model.probability(0.1 - 1e-6, d) == doctest::Approx(0.8));
+    CHECK(model.probability(0.1 + 1e-6, d) == doctest::Approx(at_infinity).epsilon(1e-9));
+  }
   SUBCASE("s NaN (fewer than k neighbours): the limit s -> +inf") {
     const RunningNormal d = distribution_of({0.1, 0.2, 0.3});
     CHECK(model.probability(std::nan(""), d) == doctest::Approx(at_infinity).epsilon(1e-9));

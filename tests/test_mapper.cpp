@@ -1,7 +1,11 @@
-// Mapper (Alg. 3): the OctoMap model through the Mapper is OctoMap's insertPointCloud; the k-NN
-// model equals an oracle that follows the paper literally: brute-force s_p over the union of the
-// keyframes, the distribution by two passes, eq 13-15 per endpoint, rays key by key
-// (compute_ray_keys) and the map updated voxel by voxel.
+// Mapper (Alg. 3): the OctoMap model through the Mapper is ScanInserter's insertion (itself
+// checked against liboctomap in test_octomap_reference.cpp); the k-NN model equals an oracle
+// written from the paper: brute-force s_p over the union of the keyframes (knn_truth.hpp), the
+// distribution by two passes, eq 13-15 per endpoint with erfc, rays key by key
+// (compute_ray_keys), the map updated voxel by voxel. It shares the DDA, the max-range
+// truncation, the map's update rule and kMinProb with the code under test, and applies eq 15's
+// per-node sum as one update (Alg. 3 line 5 adds per point; the two differ only where clamping
+// cuts in between).
 
 #include <doctest/doctest.h>
 
@@ -253,6 +257,28 @@ TEST_CASE("mapper: points beyond max_range stay out of the map cloud and carve a
   CHECK(mapper.map().logodds(k).has_value());
   REQUIRE(mapper.map().grid().coord_to_key(5.05, 1.05, 0.05, k));
   CHECK_FALSE(mapper.map().logodds(k).has_value());
+}
+
+TEST_CASE("mapper: the two keyframe overloads are not mixed; the reserved id is refused") {
+  const std::vector<Point3d> pts = {{1, 1, 1}, {2, 2, 2}};
+  const std::vector<std::uint64_t> ids = {1, 2};
+  {
+    Mapper<KnnModel> m(0.1);
+    m.insert_keyframe(Point3d{}, pts, ids);
+    ChangeSet cs;
+    CHECK_THROWS_AS(m.insert_keyframe(Point3d{}, pts, ids, cs), std::invalid_argument);
+  }
+  {
+    Mapper<KnnModel> m(0.1);
+    ChangeSet cs;
+    cs.added = {{1, pts[0]}, {2, pts[1]}};
+    m.insert_keyframe(Point3d{}, pts, ids, cs);
+    CHECK_THROWS_AS(m.insert_keyframe(Point3d{}, pts, ids), std::invalid_argument);
+    CHECK(m.tracker().size() == 2);
+  }
+  Mapper<KnnModel> m(0.1);
+  CHECK_THROWS_AS(m.insert_keyframe(Point3d{}, pts, std::vector<std::uint64_t>{1, ~0ull}),
+                  std::invalid_argument);
 }
 
 TEST_CASE("mapper: bad options are rejected") {

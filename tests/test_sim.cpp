@@ -82,7 +82,6 @@ TEST_CASE("sim: the k-NN model keeps wrong matches out of the map (the paper's T
     CHECK(mk.irrelevant * 10 <= mo.irrelevant);    // ... the k-NN model <= 10 % of them
     CHECK(mk.in_shell * 100 >= mo.in_shell * 97);  // and keeps the shell
     CHECK(mk.free_inside < mo.free_inside);        // fewer rays through the objects
-    CHECK(mo.shell == mk.shell);
     CHECK(mo.shell > 1200);
   }
 }

@@ -139,16 +139,7 @@ inline int run_convert(const std::vector<std::string>& argv) {
     } else if (out_ext == ".png") {
       write_map_png(out, map);
     } else if (out_ext == ".voxels" || out_ext == ".txt") {
-      const io::VoxelSelection s = sel("all");
-      std::vector<io::VoxelRecord> records;
-      const auto& g = map.grid();
-      map.for_each_voxel([&](const OcKey& k, float v) {
-        const bool occ = map.is_occupied(v);
-        if (s == io::VoxelSelection::all || occ == (s == io::VoxelSelection::occupied))
-          records.push_back(
-              {g.index_to_coord(k[0]), g.index_to_coord(k[1]), g.index_to_coord(k[2]), v});
-      });
-      io::write_voxel_list(out, std::move(records));
+      io::write_voxel_list(out, io::voxel_records(map, sel("all")));
     } else if (out_ext == ".ply") {
       io::VoxelExportOptions o;
       o.which = sel("occupied");

@@ -14,6 +14,7 @@
 #include <knnocc/map/occupancy_map.hpp>
 
 #include "args.hpp"
+#include "map_outputs.hpp"  // lower_extension
 
 namespace knnocc::cli {
 
@@ -69,7 +70,7 @@ inline int run_eval(const std::vector<std::string>& argv) {
   opt.ground_band = args.number("--ground-band", opt.ground_band);
   if (!(opt.inflate >= 0) || !(opt.ground_band >= 0))
     throw UsageError("--inflate and --ground-band must be >= 0");
-  const std::string ext = map_path.size() >= 3 ? map_path.substr(map_path.size() - 3) : "";
+  const std::string ext = lower_extension(map_path);
   const bool tree = ext == ".bt" || ext == ".ot";
   if (!tree && !args.has("--res"))
     throw UsageError("--res is required for a voxel list (the map's voxel size)");

@@ -159,16 +159,10 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
                  opt.input.c_str(), total.out_of_range, map.grid().max_coord(), opt.res);
 
   if (!opt.out_voxels.empty()) {
-    std::vector<io::VoxelRecord> out;
-    out.reserve(map.num_voxels());
-    const auto& g = map.grid();
-    map.for_each_voxel([&](const OcKey& k, float v) {
-      const bool occ = map.is_occupied(v);
-      if (opt.which == "all" || (opt.which == "occupied") == occ)
-        out.push_back(io::VoxelRecord{g.index_to_coord(k[0]), g.index_to_coord(k[1]),
-                                      g.index_to_coord(k[2]), v});
-    });
-    io::write_voxel_list(opt.out_voxels, std::move(out));
+    const io::VoxelSelection which = opt.which == "all"        ? io::VoxelSelection::all
+                                     : opt.which == "occupied" ? io::VoxelSelection::occupied
+                                                               : io::VoxelSelection::free;
+    io::write_voxel_list(opt.out_voxels, io::voxel_records(map, which));
   }
   write_map_outputs(map, args);
 

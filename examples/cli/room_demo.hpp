@@ -190,11 +190,7 @@ inline int run_room_demo(const std::vector<std::string>& argv) {
   }
 
   if (args.has("--out-voxels")) {
-    std::vector<io::VoxelRecord> out;
-    map.for_each_voxel([&](const OcKey& k, float v) {
-      out.push_back({g.index_to_coord(k[0]), g.index_to_coord(k[1]), g.index_to_coord(k[2]), v});
-    });
-    io::write_voxel_list(args.str("--out-voxels"), std::move(out));
+    io::write_voxel_list(args.str("--out-voxels"), io::voxel_records(map));
     std::printf("wrote %s\n", args.str("--out-voxels").c_str());
   }
   return 0;

@@ -26,7 +26,7 @@ range), a fraction of wrong stereo matches. Writes
   DIR/reference.txt                      the true shapes, for `knnocc eval`
 and prints: keyframes N points N outliers N map_points N
 options:
-  --seed S          random seed (default 1); the scene is the same for a seed on every platform
+  --seed S          random seed (default 1); the same scene for a seed with this build
   --keyframes N     keyframes around the circle (default 60)
   --outliers F      fraction of wrong stereo matches per keyframe (default 0.08, in [0, 1))
 )";

@@ -60,9 +60,10 @@ struct MapperOptions {
 struct KeyframeStats {
   ScanStats scan;           ///< the map update
   TrackerUpdate tracker;    ///< the map point cloud's change (k-NN model; zero otherwise)
-  std::size_t rated = 0;    ///< endpoints rated from the tracker (k-NN model)
+  std::size_t rated = 0;    ///< endpoints the k-NN model rated (with or without an s)
   std::size_t rays = 0;     ///< of those, the reliable ones that cast a free ray (eq 14)
-  std::size_t unrated = 0;  ///< endpoints without an s (fewer than k neighbours, or no id)
+  std::size_t unrated = 0;  ///< of those, the ones without an s (< k neighbours, or an id not
+                            ///< in the map cloud): rated as for s -> infinity
 };
 
 namespace detail {
@@ -105,7 +106,10 @@ class Mapper {
 
   /// Alg. 3 for one keyframe: `points` in the world frame (any point type), seen from `origin`;
   /// `ids` one map-point id per point, or empty (then each point is a new map point). A sequence
-  /// must either always or never give ids. The OctoMap model ignores ids.
+  /// must either always or never give ids, and a Mapper takes keyframes through this overload or
+  /// through the ChangeSet one, not both (std::invalid_argument). The OctoMap model ignores ids.
+  /// A NaN/Inf origin inserts nothing and leaves the map cloud as it was
+  /// (ScanStats::origin_valid == false).
   template <class Points, class Origin>
   KeyframeStats insert_keyframe(const Origin& origin, const Points& points,
                                 const std::vector<std::uint64_t>& ids = {}) {
@@ -114,9 +118,8 @@ class Mapper {
       (void)ids;
       ks.scan = caster_.insert_point_cloud(origin, points, options_.max_range, options_.discretize);
     } else {
-      load(origin, points);
-      if (!ids.empty() && ids.size() != world_.size())
-        detail::invalid_argument("insert_keyframe: one id per point expected");
+      use_mode(Mode::keyframe_union);
+      if (!load(origin, points, ids, ks)) return ks;
       // Points beyond max_range stay out of the map cloud (they still cast their truncated ray).
       cloud_.clear();
       cloud_ids_.clear();
@@ -141,10 +144,11 @@ class Mapper {
   template <class Points, class Origin, bool B = uses_map_cloud, std::enable_if_t<B, int> = 0>
   KeyframeStats insert_keyframe(const Origin& origin, const Points& points,
                                 const std::vector<std::uint64_t>& ids, const ChangeSet& change) {
-    load(origin, points);
-    if (ids.size() != world_.size())
+    use_mode(Mode::explicit_change);
+    if (ids.size() != static_cast<std::size_t>(std::distance(std::begin(points), std::end(points))))
       detail::invalid_argument("insert_keyframe: one id per point expected");
     KeyframeStats ks;
+    if (!load(origin, points, ids, ks)) return ks;
     ks.tracker = tracker_.apply(change);
     point_ids_.assign(world_.size(), KeyframeUnion::kNoId);
     for (std::size_t j = 0; j < world_.size(); ++j)
@@ -172,11 +176,34 @@ class Mapper {
       return TrackerMember{};
   }
 
+  // How the map cloud's changes arrive; mixing the two would let KeyframeUnion and the tracker
+  // disagree about which ids exist.
+  enum class Mode { unset, keyframe_union, explicit_change };
+  void use_mode(Mode m) {
+    if (mode_ == Mode::unset) mode_ = m;
+    if (mode_ != m)
+      detail::invalid_argument(
+          "insert_keyframe: a Mapper takes keyframes either with their ChangeSet or without, "
+          "not both");
+  }
+
+  // Loads the keyframe and checks its ids; false (with the stats of an empty insert) when the
+  // origin is not finite: then nothing changes, not even the map cloud.
   template <class Origin, class Points>
-  void load(const Origin& origin, const Points& points) {
+  bool load(const Origin& origin, const Points& points, const std::vector<std::uint64_t>& ids,
+            KeyframeStats& ks) {
     origin_ = to_point3d(origin);
     world_.clear();
     for (const auto& p : points) world_.push_back(to_point3d(p));
+    if (!ids.empty() && ids.size() != world_.size())
+      detail::invalid_argument("insert_keyframe: one id per point expected");
+    for (const std::uint64_t id : ids)
+      if (id == KeyframeUnion::kNoId)
+        detail::invalid_argument("insert_keyframe: id 2^64-1 is reserved (KeyframeUnion::kNoId)");
+    if (is_finite(origin_)) return true;
+    ks.scan.origin_valid = false;
+    ks.scan.points = world_.size();
+    return false;
   }
 
   // The caster's tests (OctoMap's float norm against max_range, the key range), so the map
@@ -184,12 +211,11 @@ class Mapper {
   bool within_range(std::size_t j) const {
     const Point3d& p = world_[j];
     if (!is_finite(p)) return false;
-    const auto f = [](double v) { return detail::to_float(v); };
+    const Point3f q = detail::to_point3f(p), o = detail::to_point3f(origin_);
     Key k;
-    if (!map_.grid().point_to_key(Point3f{f(p.x), f(p.y), f(p.z)}, k)) return false;
+    if (!map_.grid().point_to_key(q, k)) return false;
     if (options_.max_range < 0.0) return true;
-    return detail::octomap_norm(f(p.x) - f(origin_.x), f(p.y) - f(origin_.y),
-                                f(p.z) - f(origin_.z)) <= options_.max_range;
+    return detail::octomap_norm(q.x - o.x, q.y - o.y, q.z - o.z) <= options_.max_range;
   }
 
   // Eq 13-15 for the loaded keyframe, then the scan (Alg. 3).
@@ -218,6 +244,7 @@ class Mapper {
   TrackerMember tracker_;
   Caster caster_;
   // k-NN model: the keyframe being inserted (kept for their memory).
+  Mode mode_ = Mode::unset;
   KeyframeUnion union_;
   Point3d origin_;
   std::vector<Point3d> world_, cloud_;

@@ -1,4 +1,7 @@
 // Reference-shape reader of `knnocc eval`, and the metrics on what it accepts.
+#include <stdexcept>
+
+#include <knnocc/eval/metrics.hpp>
 #include <knnocc/eval/reference.hpp>
 
 #include "fuzz_support.hpp"
@@ -9,6 +12,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const double d = ref.distance({0.1, 0.2, 0.3});
     if (!(d >= 0)) std::abort();  // +inf is fine (far away), NaN is not
     ref.relation({0, 0, 0}, {0.1, 0.1, 0.1});
+    // The metrics on an empty map at a coarse grid: the shell count walks the reference's box.
+    try {
+      const knnocc::OccupancyMap<knnocc::OcKey> map(5.0);
+      knnocc::eval::evaluate(map, ref);
+    } catch (const std::invalid_argument&) {  // a box too large to walk: the documented refusal
+    }
   });
   return 0;
 }

@@ -15,8 +15,11 @@
 //   shell_recall       in_shell / shell
 //   free_inside        free voxels lying entirely inside a solid (space wrongly carved)
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <string>
 
 #include "../map/occupancy_map.hpp"
 #include "reference.hpp"
@@ -51,21 +54,40 @@ inline bool on_shell(const Reference& ref, BoxRelation rel, const Point3d& c) {
   return rel == BoxRelation::boundary && !(ref.has_ground && !(c.z > ref.ground_z));
 }
 
-/// Voxels of the grid that lie on the reference's shell.
+/// Most voxels count_shell() examines (the reference's bounding box in voxels): a box larger than
+/// this (e.g. a kilometre-sized shape at centimetre voxels) is refused as a mistake.
+inline constexpr std::uint64_t kMaxShellBox = std::uint64_t{1} << 31;
+
+/// Voxels of the grid that lie on the reference's shell. Only voxels inside the key range are
+/// counted (a map cannot hold others); a bounding box of more than kMaxShellBox voxels is
+/// std::invalid_argument.
 template <class Key>
 std::size_t count_shell(const Grid<Key>& grid, const Reference& ref) {
   Point3d lo, hi;
   ref.bounds(grid.resolution(), lo, hi);
-  Key klo, khi;
-  if (!(lo.x <= hi.x) || !grid.coord_to_key(lo.x, lo.y, lo.z, klo) ||
-      !grid.coord_to_key(hi.x, hi.y, hi.z, khi))
-    return 0;
+  if (!(lo.x <= hi.x)) return 0;
   const double r = grid.resolution();
+  // Key-space box in 64 bits, clamped to the key range (no wrap-around of narrow key types).
+  std::int64_t klo[3], khi[3];
+  const double l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
+  std::uint64_t box = 1;
+  for (int a = 0; a < 3; ++a) {
+    const double c = static_cast<double>(Key::center), top = static_cast<double>(Key::extent - 1);
+    klo[a] = static_cast<std::int64_t>(std::min(std::max(std::floor(l[a] / r) + c, 0.0), top));
+    khi[a] = static_cast<std::int64_t>(std::min(std::max(std::floor(h[a] / r) + c, 0.0), top));
+    box *= static_cast<std::uint64_t>(khi[a] - klo[a] + 1);
+    if (box > kMaxShellBox)
+      knnocc::detail::invalid_argument(
+          "the reference's bounding box spans more than 2^31 voxels at " + std::to_string(r) +
+          " m");
+  }
   std::size_t n = 0;
-  for (auto x = klo[0]; x <= khi[0]; ++x)
-    for (auto y = klo[1]; y <= khi[1]; ++y)
-      for (auto z = klo[2]; z <= khi[2]; ++z) {
-        const Point3d c{grid.index_to_coord(x), grid.index_to_coord(y), grid.index_to_coord(z)};
+  for (std::int64_t x = klo[0]; x <= khi[0]; ++x)
+    for (std::int64_t y = klo[1]; y <= khi[1]; ++y)
+      for (std::int64_t z = klo[2]; z <= khi[2]; ++z) {
+        const Point3d c{grid.index_to_coord(static_cast<typename Key::index_type>(x)),
+                        grid.index_to_coord(static_cast<typename Key::index_type>(y)),
+                        grid.index_to_coord(static_cast<typename Key::index_type>(z))};
         n += on_shell(ref, voxel_relation(ref, c, r), c);
       }
   return n;

@@ -159,18 +159,18 @@ class Reference {
 inline void write_reference(const std::string& path, const Reference& ref) {
   std::string text =
       "# knnocc reference scene: ground z | ellipsoid centre semi-axes | cuboid lo hi\n";
-  char line[256];
+  char line[512];
   if (ref.has_ground) {
-    std::snprintf(line, sizeof line, "ground %.9g\n", ref.ground_z);
+    std::snprintf(line, sizeof line, "ground %.17g\n", ref.ground_z);
     text += line;
   }
   for (const Ellipsoid& e : ref.ellipsoids) {
-    std::snprintf(line, sizeof line, "ellipsoid %.9g %.9g %.9g %.9g %.9g %.9g\n", e.centre.x,
+    std::snprintf(line, sizeof line, "ellipsoid %.17g %.17g %.17g %.17g %.17g %.17g\n", e.centre.x,
                   e.centre.y, e.centre.z, e.semi_axes.x, e.semi_axes.y, e.semi_axes.z);
     text += line;
   }
   for (const Cuboid& c : ref.cuboids) {
-    std::snprintf(line, sizeof line, "cuboid %.9g %.9g %.9g %.9g %.9g %.9g\n", c.lo.x, c.lo.y,
+    std::snprintf(line, sizeof line, "cuboid %.17g %.17g %.17g %.17g %.17g %.17g\n", c.lo.x, c.lo.y,
                   c.lo.z, c.hi.x, c.hi.y, c.hi.z);
     text += line;
   }

@@ -22,10 +22,10 @@
 #include "detail/colormap.hpp"
 #include "detail/file_text.hpp"
 #include "error.hpp"
+#include "voxel_list.hpp"
 
 namespace knnocc::io {
 
-enum class VoxelSelection { occupied, free, all };
 enum class VoxelShape { points, cubes };
 
 struct VoxelExportOptions {

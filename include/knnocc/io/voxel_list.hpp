@@ -10,6 +10,7 @@
 #include <tuple>
 #include <vector>
 
+#include "../map/occupancy_map.hpp"
 #include "detail/file_text.hpp"
 #include "error.hpp"
 
@@ -19,6 +20,24 @@ struct VoxelRecord {
   double x, y, z;  // voxel centre
   float logodds;
 };
+
+/// Which voxels of a map an export takes (occupied: the map's occupancy threshold).
+enum class VoxelSelection { occupied, free, all };
+
+/// The map's finest-level voxels as records (centre, log-odds), in the map's storage order.
+template <class Key>
+std::vector<VoxelRecord> voxel_records(const OccupancyMap<Key>& map,
+                                       VoxelSelection which = VoxelSelection::all) {
+  std::vector<VoxelRecord> out;
+  out.reserve(which == VoxelSelection::all ? map.num_voxels() : 0);
+  const auto& g = map.grid();
+  map.for_each_voxel([&](const Key& k, float v) {
+    if (which != VoxelSelection::all && map.is_occupied(v) != (which == VoxelSelection::occupied))
+      return;
+    out.push_back({g.index_to_coord(k[0]), g.index_to_coord(k[1]), g.index_to_coord(k[2]), v});
+  });
+  return out;
+}
 
 // Sorts `voxels` and writes them atomically (temp file + rename). Non-finite coordinates are an
 // error (they have no place in the order); a non-finite logodds is written as nan/inf.

@@ -19,8 +19,10 @@
 #if !KNNOCC_HAS_EXCEPTIONS
 // Built with -fno-exceptions: nanoflann's few `throw`s (index misuse, allocation failure) become
 // abort(). GCC rejects a throw expression even in code that is never called, so `throw` is
-// redefined for nanoflann's text only: every standard header it (1.4.3 or 1.5+) includes is
-// included first, unaffected.
+// redefined for nanoflann's text only: every standard header it (1.4.3 or 1.5.x) includes is
+// included first, unaffected. Redefining a keyword is outside standard C++ (GCC and Clang accept
+// it); it happens only in -fno-exceptions builds. A nanoflann that includes a standard header not
+// listed here would need it added (noexcept.smoke fails to build otherwise).
 #include <algorithm>
 #include <array>
 #include <atomic>

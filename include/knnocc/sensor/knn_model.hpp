@@ -14,7 +14,8 @@
 //     Phi_std(w) <= 1 - P_w / P_u (small or negative w); the floor keeps logit finite (-6.9);
 //   - s NaN (the point has fewer than k neighbours or is not in the map cloud): the least reliable
 //     rating, the limit of eq 13 for s -> +inf (no free ray);
-//   - sigma == 0 (N == 1, or all valid s equal): Phi becomes the step at mu (the limit
+//   - sigma == 0 (N == 1, or all valid s equal; sigma <= 1e-9 |mu| counts as 0, since Welford
+//     leaves equal values a few ulps apart): Phi becomes the step at mu (the limit
 //     sigma -> 0): s < mu gives P_u, s == mu gives P_u - (P_u - P_w) / (2 Phi_std(w)) (a ray when
 //     w > 0: all-equal clouds, e.g. duplicates with s = 0, are consistent), s > mu the limit for
 //     s -> +inf;
@@ -77,6 +78,8 @@ class KnnModel {
   static constexpr bool uses_map_cloud = true;
   /// Lowest probability an endpoint gets (keeps logit finite).
   static constexpr double kMinProb = 1e-3;
+  /// sigma <= kFlatSigma * |mu| counts as sigma == 0 (rounding of equal values).
+  static constexpr double kFlatSigma = 1e-9;
 
   explicit KnnModel(KnnModelParams params = {}) : params_(params) {
     params_.validate();
@@ -94,10 +97,14 @@ class KnnModel {
     const double mu = dist.mean(), sigma = dist.sigma();
     double cdf = 1.0;  // s NaN: the limit s -> +inf
     if (!std::isnan(s)) {
-      if (sigma > 0.0)
+      // Equal values leave Welford's mean and sigma a few ulps off (six times 0.1 gives
+      // sigma 5e-18): below kFlatSigma * |mu| the distribution counts as flat, and s within
+      // that band of mu as equal to it.
+      const double band = kFlatSigma * std::fabs(mu);
+      if (sigma > band)
         cdf = std_normal_cdf((s - mu) / sigma);
       else
-        cdf = s < mu ? 0.0 : s > mu ? 1.0 : 0.5;
+        cdf = s < mu - band ? 0.0 : s > mu + band ? 1.0 : 0.5;
     }
     const double p = params_.p_upper - cdf / phi_w_ * (params_.p_upper - params_.p_w);
     return p < kMinProb ? kMinProb : p;

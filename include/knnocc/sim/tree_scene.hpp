@@ -12,8 +12,9 @@
 // points). A fraction `outliers` of each keyframe's observations are wrong stereo matches: new
 // map points at depth z * U(0.5, 1.6) on the viewing ray, seen by that keyframe only.
 // Keyframe clouds are in the camera frame (x right, y down, z forward) with camera-to-world
-// poses, like ../shared/data/orbslam2_stereo_keyframes. Deterministic for a seed on every
-// platform (own uniform and normal variates on std::mt19937_64).
+// poses, like ../shared/data/orbslam2_stereo_keyframes. Deterministic for a seed with a given
+// compiler and math library (own uniform and normal variates on std::mt19937_64, so no
+// standard-library distribution differs; libm's log/cos may round differently elsewhere).
 //
 // Thread safety: a TreeScene is one generator (next() advances it); use one per thread.
 
@@ -58,8 +59,18 @@ struct TreeSceneParams {
     if (!(radius > 1.5 && radius < 100)) detail::invalid_argument("radius must be in (1.5, 100) m");
     if (!(detect > 0 && detect <= 1)) detail::invalid_argument("detect must be in (0, 1]");
     if (!(outliers >= 0 && outliers < 1)) detail::invalid_argument("outliers must be in [0, 1)");
-    if (!(disparity_noise >= 0 && lateral_noise >= 0))
-      detail::invalid_argument("noise must be >= 0");
+    if (!(disparity_noise >= 0 && lateral_noise >= 0 && disparity_noise < 100 &&
+          lateral_noise < 10))
+      detail::invalid_argument("noise must be >= 0 (disparity < 100 px, lateral < 10 m)");
+    auto in = [](double v, double lo, double hi) { return v >= lo && v <= hi; };  // NaN fails
+    if (!in(height, -100, 100)) detail::invalid_argument("height must be in [-100, 100] m");
+    if (!in(focal, 1, 1e5) || !in(baseline, 1e-3, 10) || width < 16 || height_px < 16 ||
+        width > 100000 || height_px > 100000)
+      detail::invalid_argument(
+          "camera: focal in [1, 1e5] px, baseline in [1 mm, 10 m], image sides in [16, 1e5] px");
+    if (!in(foliage_density, 0, 1e4) || !in(pot_density, 0, 1e4) || !in(ground_density, 0, 1e4))
+      detail::invalid_argument("densities must be in [0, 1e4] sites per m^2");
+    if (!in(ground_radius, 0, 100)) detail::invalid_argument("ground_radius must be in [0, 100] m");
   }
 };
 

@@ -1,10 +1,21 @@
 #pragma once
-// What every bench program shares: a monotonic clock in seconds and the scan.dat dataset.
+// What the bench programs share: a monotonic clock in seconds, the resident memory, the scan.dat
+// dataset, and liboctomap's insertion as the baseline (KNNOCC_HAVE_OCTOMAP builds).
+
+#include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <vector>
+
+#include <knnocc/core/point3.hpp>
+
+#if KNNOCC_HAVE_OCTOMAP
+#include <octomap/OcTree.h>
+#endif
 
 namespace knnocc::bench {
 
@@ -27,5 +38,57 @@ inline std::string scan_dat(const std::filesystem::path& data) {
   fs::rename(tmp, out);
   return out.string();
 }
+
+/// One scan: the sensor position and its points, in the world frame.
+struct Scan {
+  Point3f origin;
+  std::vector<Point3f> points;
+};
+
+/// Current resident memory of this process, in MB (0 when /proc is not there).
+inline double resident_mb() {
+  long pages = 0, resident = 0;
+  if (FILE* f = std::fopen("/proc/self/statm", "r")) {
+    if (std::fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
+    std::fclose(f);
+  }
+  return static_cast<double>(resident) * (static_cast<double>(sysconf(_SC_PAGESIZE)) / 1024.0) /
+         1024.0;
+}
+
+#if KNNOCC_HAVE_OCTOMAP
+inline octomap::Pointcloud octomap_cloud(const std::vector<Point3f>& points) {
+  octomap::Pointcloud cloud;
+  for (const auto& p : points) cloud.push_back(p.x, p.y, p.z);
+  return cloud;
+}
+
+/// What liboctomap's run produced: the time of the insertions alone, finest-level voxel counts
+/// (leaves expanded) and memoryUsage().
+struct OctomapRun {
+  double seconds = 0;
+  std::size_t occupied = 0, free = 0, bytes = 0;
+};
+
+/// liboctomap's insertPointCloud of clouds[i] from origins[i] into a new tree (the clouds are
+/// built before the clock starts).
+inline OctomapRun run_octomap(const std::vector<octomap::Pointcloud>& clouds,
+                              const std::vector<Point3f>& origins, double res,
+                              double max_range = -1.0) {
+  octomap::OcTree tree(res);
+  OctomapRun r;
+  const double t0 = now();
+  for (std::size_t i = 0; i < clouds.size(); ++i)
+    tree.insertPointCloud(clouds[i], octomap::point3d(origins[i].x, origins[i].y, origins[i].z),
+                          max_range);
+  r.seconds = now() - t0;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const std::size_t span = std::size_t{1} << (16 - it.getDepth());
+    (tree.isNodeOccupied(*it) ? r.occupied : r.free) += span * span * span;
+  }
+  r.bytes = tree.memoryUsage();
+  return r;
+}
+#endif
 
 }  // namespace knnocc::bench

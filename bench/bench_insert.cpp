@@ -44,10 +44,7 @@ namespace {
 using knnocc::bench::now;
 using knnocc::bench::scan_dat;
 
-struct Scan {
-  Point3f origin;
-  std::vector<Point3f> points;
-};
+using knnocc::bench::Scan;
 
 struct Dataset {
   std::string name;
@@ -111,38 +108,25 @@ Result run_knnocc(const Dataset& d, double res, unsigned threads, int repeat) {
 
 #if KNNOCC_HAVE_OCTOMAP
 std::vector<octomap::Pointcloud> octomap_clouds(const Dataset& d) {
-  std::vector<octomap::Pointcloud> clouds(d.scans.size());
-  for (std::size_t i = 0; i < d.scans.size(); ++i)
-    for (const auto& p : d.scans[i].points) clouds[i].push_back(p.x, p.y, p.z);
+  std::vector<octomap::Pointcloud> clouds;
+  for (const auto& scan : d.scans) clouds.push_back(knnocc::bench::octomap_cloud(scan.points));
   return clouds;
 }
 
 Result run_octomap(const Dataset& d, const std::vector<octomap::Pointcloud>& clouds, double res) {
-  octomap::OcTree tree(res);
-  const double t0 = now();
-  for (std::size_t i = 0; i < d.scans.size(); ++i) {
-    const auto& o = d.scans[i].origin;
-    tree.insertPointCloud(clouds[i], octomap::point3d(o.x, o.y, o.z));
-  }
+  std::vector<Point3f> origins;
+  for (const auto& scan : d.scans) origins.push_back(scan.origin);
+  const auto o = knnocc::bench::run_octomap(clouds, origins, res);
   Result r;
-  r.seconds = now() - t0;
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    const std::size_t span = std::size_t{1} << (16 - it.getDepth());
-    (tree.isNodeOccupied(*it) ? r.occupied : r.free) += span * span * span;
-  }
-  r.bytes = tree.memoryUsage();
+  r.seconds = o.seconds;
+  r.occupied = o.occupied;
+  r.free = o.free;
+  r.bytes = o.bytes;
   return r;
 }
 #endif
 
-double resident_mb() {  // current RSS of this process
-  long pages = 0, resident = 0;
-  if (FILE* f = std::fopen("/proc/self/statm", "r")) {
-    if (std::fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
-    std::fclose(f);
-  }
-  return resident * (sysconf(_SC_PAGESIZE) / 1024.0) / 1024.0;
-}
+using knnocc::bench::resident_mb;
 
 // Runs f() in a forked child; returns its result (sent through a pipe) and the peak RSS it added
 // to what the child had when it started (the datasets, inherited from here).

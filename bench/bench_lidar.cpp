@@ -91,10 +91,7 @@ struct Scene {
   }
 };
 
-struct Scan {
-  Point3f origin;
-  std::vector<Point3f> points;
-};
+using knnocc::bench::Scan;
 
 std::vector<Scan> simulate(const Scene& scene, int scans, int beams, int azimuths, double range,
                            unsigned seed) {
@@ -158,22 +155,18 @@ Result run_knnocc(const std::vector<Scan>& scans, double res, double range, unsi
 
 #if KNNOCC_HAVE_OCTOMAP
 Result run_octomap(const std::vector<Scan>& scans, double res, double range) {
-  octomap::OcTree tree(res);
-  std::vector<octomap::Pointcloud> clouds(scans.size());
-  for (std::size_t i = 0; i < scans.size(); ++i)
-    for (const auto& p : scans[i].points) clouds[i].push_back(p.x, p.y, p.z);
+  std::vector<octomap::Pointcloud> clouds;
+  std::vector<Point3f> origins;
+  for (const auto& scan : scans) {
+    clouds.push_back(knnocc::bench::octomap_cloud(scan.points));
+    origins.push_back(scan.origin);
+  }
+  const auto o = knnocc::bench::run_octomap(clouds, origins, res, range);
   Result r;
-  const double t0 = now();
-  for (std::size_t i = 0; i < scans.size(); ++i) {
-    const auto& o = scans[i].origin;
-    tree.insertPointCloud(clouds[i], octomap::point3d(o.x, o.y, o.z), range);
-  }
-  r.seconds = now() - t0;
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    const std::size_t span = std::size_t{1} << (16 - it.getDepth());
-    (tree.isNodeOccupied(*it) ? r.occupied : r.free) += span * span * span;
-  }
-  r.bytes = tree.memoryUsage();
+  r.seconds = o.seconds;
+  r.occupied = o.occupied;
+  r.free = o.free;
+  r.bytes = o.bytes;
   return r;
 }
 #endif

@@ -77,22 +77,12 @@ Child run_process(const std::vector<std::string>& args) {
 #if KNNOCC_HAVE_OCTOMAP
 // liboctomap's insertPointCloud alone (the point cloud is built before the clock starts).
 double octomap_insert(const std::vector<knnocc::Point3f>& points, double res) {
-  octomap::OcTree tree(res);
-  octomap::Pointcloud cloud;
-  for (const auto& p : points) cloud.push_back(p.x, p.y, p.z);
-  const double t0 = now();
-  tree.insertPointCloud(cloud, octomap::point3d(0, 0, 0));
-  return now() - t0;
+  return knnocc::bench::run_octomap({knnocc::bench::octomap_cloud(points)}, {knnocc::Point3f{}},
+                                    res)
+      .seconds;
 }
 
-double resident_mb() {  // current RSS of this process
-  long pages = 0, resident = 0;
-  if (FILE* f = std::fopen("/proc/self/statm", "r")) {
-    if (std::fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
-    std::fclose(f);
-  }
-  return resident * (sysconf(_SC_PAGESIZE) / 1024.0) / 1024.0;
-}
+using knnocc::bench::resident_mb;
 
 // The same in a forked child: its peak RSS, and the RSS it started with (this benchmark's, the
 // points included, after returning free heap memory to the system).

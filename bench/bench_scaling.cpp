@@ -54,12 +54,8 @@ Run knnocc_run(const std::vector<Point3f>& pts, double res, double range, unsign
 
 double octomap_run(const std::vector<Point3f>& pts, double res, double range) {
 #if KNNOCC_HAVE_OCTOMAP
-  octomap::OcTree tree(res);
-  octomap::Pointcloud cloud;
-  for (const auto& p : pts) cloud.push_back(p.x, p.y, p.z);
-  const double t0 = now();
-  tree.insertPointCloud(cloud, octomap::point3d(0, 0, 0), range);
-  return now() - t0;
+  return knnocc::bench::run_octomap({knnocc::bench::octomap_cloud(pts)}, {Point3f{}}, res, range)
+      .seconds;
 #else
   (void)pts, (void)res, (void)range;
   return 0.0;

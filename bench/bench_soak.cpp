@@ -7,14 +7,11 @@
 //
 //   build/bin/bench_soak [--keyframes N] [--check-every M] [--seed S]
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 #include <random>
 #include <unordered_map>
 #include <unordered_set>
@@ -30,13 +27,6 @@
 using namespace knnocc;
 
 namespace {
-
-double rss_mb() {
-  std::ifstream statm("/proc/self/statm");
-  long pages = 0, resident = 0;
-  statm >> pages >> resident;
-  return static_cast<double>(resident) * static_cast<double>(::sysconf(_SC_PAGESIZE)) / 1048576.0;
-}
 
 // The map point cloud as the SLAM system sees it, with O(1) random picks.
 struct Cloud {
@@ -133,7 +123,7 @@ int main(int argc, char** argv) {
     mapper.insert_keyframe(kf.pose.t, world, ids, cs);
     ms_total += (bench::now() - a) * 1000;
 
-    const double rss = rss_mb();
+    const double rss = bench::resident_mb();
     max_rss = std::max(max_rss, rss);
     if (f % every == 0 || f == keyframes) {
       if (first_rss == 0) first_rss = rss;

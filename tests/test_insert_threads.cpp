@@ -130,9 +130,9 @@ TEST_CASE("insert_threads.scan_dat") {
 
 TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
   // Rays of every kind through one box: random, axis-aligned, planar, exact diagonals through
-  // voxel corners (ties), one-voxel and zero-length ones, negative coordinates. The walk that
-  // insert_point_cloud uses (four rays at once on AVX2 machines) against the one-ray walk and
-  // against compute_ray_keys, bit for bit and visit for visit.
+  // voxel corners (ties), one-voxel and zero-length ones, negative coordinates. Every walk
+  // insert_point_cloud may use (four rays at once on AVX2 machines, eight on AVX-512 ones) and
+  // the one-ray walk against compute_ray_keys, bit for bit and visit for visit.
   knnocc::test::Rng rng(5);
   for (const double res : {0.1, 0.5, 0.07}) {
     CAPTURE(res);
@@ -190,14 +190,16 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
     }
     box.reshape(base, size);
     const std::size_t words = static_cast<std::size_t>((size[0] * size[1] * size[2] + 63) / 64);
-    // Chunks of 7 rays: four lanes, refills and the scalar drain all happen in every chunk, and
-    // a voxel missed by one ray is rarely hidden by another ray of the same chunk.
+    // Chunks of 7 and 13 rays: lanes, refills and the scalar drain all happen in every chunk (four
+    // lanes, and eight in the longer chunks), and a voxel missed by one ray is rarely hidden by
+    // another ray of the same chunk.
     std::size_t walked = 0;
-    for (std::size_t first = 0; first < rays.size(); first += 7) {
+    for (std::size_t first = 0, chunk = 7; first < rays.size();
+         first += chunk, chunk = chunk == 7 ? 13 : 7) {
       std::vector<knnocc::detail::LinearRay> linear;
       std::vector<std::uint64_t> expected(words, 0);
       std::size_t expected_visits = 0;
-      for (std::size_t i = first; i < std::min(rays.size(), first + 7); ++i) {
+      for (std::size_t i = first; i < std::min(rays.size(), first + chunk); ++i) {
         knnocc::RayWalk<OcKey> w;
         if (knnocc::start_ray(grid, rays[i].first, rays[i].second, w) != knnocc::RayStart::walk) {
           CHECK(keys[i].empty());
@@ -213,7 +215,9 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
         for (const OcKey& k : keys[i])
           knnocc::detail::set_bit(expected.data(), box.index(k[0], k[1], k[2]));
       }
-      auto walk = [&](bool lanes) {
+      // Every walk this CPU can run: 0 scalar, 1 the dispatched one, 2 four AVX2 lanes, 3 eight
+      // AVX-512 lanes.
+      for (int variant = 0; variant < 4; ++variant) {
         std::vector<std::uint64_t> bits(words, 0);
         std::size_t next = 0;
         auto source = [&](knnocc::detail::LinearRay& r) {
@@ -221,23 +225,35 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
           r = linear[next++];
           return true;
         };
-        const std::size_t visits =
-            lanes ? knnocc::detail::walk_linear_rays(source, bits.data())
-                  : knnocc::detail::walk_linear_rays_scalar(source, bits.data());
-        return std::make_pair(visits, bits);
-      };
-      const auto scalar = walk(false), fast = walk(true);
-      CHECK(scalar.first == expected_visits);
-      CHECK(fast.first == expected_visits);
-      CHECK(scalar.second == expected);
-      CHECK(fast.second == expected);
+        std::size_t visits = 0;
+        if (variant == 0) {
+          visits = knnocc::detail::walk_linear_rays_scalar(source, bits.data());
+        } else if (variant == 1) {
+          visits = knnocc::detail::walk_linear_rays(source, bits.data());
+#if KNNOCC_AVX2_LANES
+        } else if (variant == 2 && knnocc::detail::cpu_has_avx2()) {
+          visits = knnocc::detail::walk_linear_rays_avx2(source, bits.data());
+        } else if (variant == 3 && knnocc::detail::cpu_has_avx512()) {
+          visits = knnocc::detail::walk_linear_rays_avx512(source, bits.data());
+#endif
+        } else {
+          continue;
+        }
+        CAPTURE(variant);
+        CHECK(visits == expected_visits);
+        CHECK(bits == expected);
+      }
       walked += expected_visits;
     }
     MESSAGE(walked << " voxels walked at resolution " << res);
   }
 #if KNNOCC_AVX2_LANES
-  const std::string lanes = knnocc::detail::cpu_has_avx2() ? "used" : "not supported by this CPU";
-  MESSAGE("four-lane AVX2 walk: " << lanes);
+  const auto tested = [](bool has) {
+    return std::string(has ? "tested" : "not supported by this CPU");
+  };
+  MESSAGE("four-lane AVX2 walk: " << tested(knnocc::detail::cpu_has_avx2())
+                                  << "; eight-lane AVX-512 walk: "
+                                  << tested(knnocc::detail::cpu_has_avx512()));
 #endif
 }
 

@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "huge_pages.hpp"
+
 namespace knnocc::detail {
 
 class FlatIndex {
@@ -80,8 +82,8 @@ class FlatIndex {
 
   void grow() {
     const std::size_t cap = keys_.empty() ? 64 : 2 * keys_.size();
-    std::vector<std::uint64_t> old_keys(cap, kEmpty);
-    std::vector<std::uint32_t> old_values(cap);
+    BigVector<std::uint64_t> old_keys(cap, kEmpty);
+    BigVector<std::uint32_t> old_values(cap);
     old_keys.swap(keys_);
     old_values.swap(values_);
     mask_ = cap - 1;
@@ -94,8 +96,8 @@ class FlatIndex {
     }
   }
 
-  std::vector<std::uint64_t> keys_;
-  std::vector<std::uint32_t> values_;
+  BigVector<std::uint64_t> keys_;  // every page is touched: large tables take huge pages
+  BigVector<std::uint32_t> values_;
   std::size_t size_ = 0;
   std::size_t mask_ = 0;
 };

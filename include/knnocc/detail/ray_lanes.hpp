@@ -310,38 +310,208 @@ KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* 
     }
     ++iteration;
 
-    // Rare path: settle the lanes that may have ended, refill finished ones from the stream.
+    // Rare path: the lanes that ended take the next rays of the stream; a refilled lane stands
+    // on its new ray's origin voxel, so the marking below covers it like the others.
     alignas(32) double tm[kLanes];
     alignas(32) std::int64_t idx[kLanes];
     _mm256_store_pd(tm, tmin);
     _mm256_store_si256(reinterpret_cast<__m256i*>(idx), v.index);
-    bool live[kLanes] = {true, true, true, true}, dry = false;
-    for (int l = 0; l < kLanes; ++l) {
-      const bool done = ((ended >> l) & 1) && (idx[l] == end[l] || tm[l] > length[l]);
-      if (!done) {
-        set_bit(bits, idx[l]);
-        ++visits;
-      } else if (!dry && next(r)) {
-        set_bit(bits, r.index);
-        ++visits;
+    unsigned done = 0;
+    for (unsigned m = static_cast<unsigned>(ended); m; m &= m - 1) {
+      const int l = __builtin_ctz(m);
+      if (idx[l] == end[l] || tm[l] > length[l]) done |= 1u << l;
+    }
+    for (unsigned m = done; m; m &= m - 1) {
+      const int l = __builtin_ctz(m);
+      if (next(r)) {
         put_lane(v, l, r);
         due[l] = iteration + r.state.steps_to_end;
         end[l] = r.end_index;
         length[l] = r.state.length;
-      } else {
-        dry = true;
-        live[l] = false;
+        done &= ~(1u << l);
+      } else {  // the stream ran dry: the rays still walking finish one at a time
+        for (unsigned live = ~done & 0xfu; live; live &= live - 1) {
+          const int j = __builtin_ctz(live);
+          const LinearRay rj = get_lane(v, j, due[j] - iteration);
+          set_bit(bits, rj.index);
+          visits += 1 + finish_linear_ray(rj, bits);
+        }
+        return visits;
       }
     }
-    if (dry) {  // the stream ran dry: the rays still walking finish one at a time
-      for (int l = 0; l < kLanes; ++l)
-        if (live[l]) visits += finish_linear_ray(get_lane(v, l, due[l] - iteration), bits);
-      return visits;
-    }
+    mark_lanes(v, bits);
+    visits += kLanes;
   }
 }
 
 #undef KNNOCC_TARGET_AVX2
+
+// ---- eight lanes: AVX-512 ----------------------------------------------------------------------
+//
+// The same walk on eight rays, one per lane of a 512-bit register, with walk_ray()'s comparisons
+// as mask registers (compare into a mask, add under the mask): the same operations on the same
+// doubles as the four-lane walk, so again exactly walk_ray()'s voxels. Chosen at run time where
+// the CPU has AVX-512F; measured 1.6x faster per voxel than four lanes on an AMD Zen 5 machine.
+
+#define KNNOCC_TARGET_AVX512 __attribute__((target("avx512f,avx2,bmi2")))
+// GCC 12's AVX-512 intrinsics pass a deliberately undefined register (_mm512_undefined_*) and
+// then warn about it once inlined here.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#endif
+
+inline bool cpu_has_avx512() {
+#if defined(__AVX512F__) && defined(__BMI2__)
+  return true;
+#else
+  static const bool has = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("bmi2");
+  return has;
+#endif
+}
+
+struct RayLanes8 {
+  __m512d t0, t1, t2;  // next border crossing per axis
+  __m512d d0, d1, d2;  // between two borders per axis
+  __m512d length;
+  __m512i index, end;  // bit of the current and of the end voxel
+  __m512i s0, s1, s2;  // bit offset of a step per axis
+};
+
+KNNOCC_TARGET_AVX512 inline void put_lane8(RayLanes8& v, int l, const LinearRay& r) {
+  const auto m = static_cast<__mmask8>(1u << l);
+  v.t0 = _mm512_mask_mov_pd(v.t0, m, _mm512_set1_pd(r.state.t_max[0]));
+  v.t1 = _mm512_mask_mov_pd(v.t1, m, _mm512_set1_pd(r.state.t_max[1]));
+  v.t2 = _mm512_mask_mov_pd(v.t2, m, _mm512_set1_pd(r.state.t_max[2]));
+  v.d0 = _mm512_mask_mov_pd(v.d0, m, _mm512_set1_pd(r.state.t_delta[0]));
+  v.d1 = _mm512_mask_mov_pd(v.d1, m, _mm512_set1_pd(r.state.t_delta[1]));
+  v.d2 = _mm512_mask_mov_pd(v.d2, m, _mm512_set1_pd(r.state.t_delta[2]));
+  v.length = _mm512_mask_mov_pd(v.length, m, _mm512_set1_pd(r.state.length));
+  v.index = _mm512_mask_mov_epi64(v.index, m, _mm512_set1_epi64(r.index));
+  v.end = _mm512_mask_mov_epi64(v.end, m, _mm512_set1_epi64(r.end_index));
+  v.s0 = _mm512_mask_mov_epi64(v.s0, m, _mm512_set1_epi64(r.stride[0]));
+  v.s1 = _mm512_mask_mov_epi64(v.s1, m, _mm512_set1_epi64(r.stride[1]));
+  v.s2 = _mm512_mask_mov_epi64(v.s2, m, _mm512_set1_epi64(r.stride[2]));
+}
+
+KNNOCC_TARGET_AVX512 inline LinearRay get_lane8(const RayLanes8& v, int l,
+                                                std::int64_t steps_to_end) {
+  alignas(64) double d[7][8];
+  alignas(64) std::int64_t i[5][8];
+  const __m512d dv[7] = {v.t0, v.t1, v.t2, v.d0, v.d1, v.d2, v.length};
+  const __m512i iv[5] = {v.index, v.end, v.s0, v.s1, v.s2};
+  for (int k = 0; k < 7; ++k) _mm512_store_pd(d[k], dv[k]);
+  for (int k = 0; k < 5; ++k) _mm512_store_si512(i[k], iv[k]);
+  return LinearRay{
+      {{d[0][l], d[1][l], d[2][l]}, {d[3][l], d[4][l], d[5][l]}, d[6][l], steps_to_end},
+      i[0][l],
+      {i[2][l], i[3][l], i[4][l]},
+      i[1][l]};
+}
+
+// step_lanes() on eight lanes; returns the lanes that may have ended.
+KNNOCC_TARGET_AVX512 inline unsigned step_lanes8(RayLanes8& v, __m512d& tmin) {
+  const __mmask8 lt01 = _mm512_cmp_pd_mask(v.t0, v.t1, _CMP_LT_OQ);
+  const __mmask8 lt02 = _mm512_cmp_pd_mask(v.t0, v.t2, _CMP_LT_OQ);
+  const __mmask8 lt12 = _mm512_cmp_pd_mask(v.t1, v.t2, _CMP_LT_OQ);
+  const auto x = static_cast<__mmask8>(lt01 & lt02);
+  const auto y = static_cast<__mmask8>(~lt01 & lt12);
+  const auto z = static_cast<__mmask8>(~(lt02 | lt12));
+  v.t0 = _mm512_mask_add_pd(v.t0, x, v.t0, v.d0);
+  v.t1 = _mm512_mask_add_pd(v.t1, y, v.t1, v.d1);
+  v.t2 = _mm512_mask_add_pd(v.t2, z, v.t2, v.d2);
+  const __m512i stride = _mm512_mask_blend_epi64(x, _mm512_mask_blend_epi64(y, v.s2, v.s1), v.s0);
+  v.index = _mm512_add_epi64(v.index, stride);
+  tmin = _mm512_min_pd(v.t2, _mm512_min_pd(v.t1, v.t0));
+  return static_cast<unsigned>(_mm512_cmp_pd_mask(tmin, v.length, _CMP_GT_OQ) |
+                               _mm512_cmpeq_epi64_mask(v.index, v.end));
+}
+
+KNNOCC_TARGET_AVX512 inline void mark_lanes8(const RayLanes8& v, std::uint64_t* bits) {
+  alignas(64) std::int64_t word[8];
+  alignas(64) std::uint64_t bit[8];
+  _mm512_store_si512(word, _mm512_srai_epi64(v.index, 6));
+  _mm512_store_si512(bit, _mm512_sllv_epi64(_mm512_set1_epi64(1),
+                                            _mm512_and_si512(v.index, _mm512_set1_epi64(63))));
+  for (int l = 0; l < 8; ++l) bits[word[l]] |= bit[l];
+}
+
+/// walk_linear_rays_avx2() with eight lanes.
+template <class Next>
+KNNOCC_TARGET_AVX512 std::size_t walk_linear_rays_avx512(Next& next, std::uint64_t* bits) {
+  constexpr int kLanes = 8;
+  RayLanes8 v;
+  v.t0 = v.t1 = v.t2 = v.d0 = v.d1 = v.d2 = v.length = _mm512_setzero_pd();
+  v.index = v.end = v.s0 = v.s1 = v.s2 = _mm512_setzero_si512();
+  std::int64_t iteration = 0;  // steps taken by every lane
+  std::int64_t due[kLanes];    // value of `iteration` when a lane's step countdown runs out
+  std::int64_t end[kLanes];    // scalar copies for the rare path
+  double length[kLanes];
+  std::size_t visits = 0;
+  LinearRay r;
+  int loaded = 0;
+  for (; loaded < kLanes && next(r); ++loaded) {
+    set_bit(bits, r.index);  // the origin voxel
+    ++visits;
+    put_lane8(v, loaded, r);
+    due[loaded] = r.state.steps_to_end;
+    end[loaded] = r.end_index;
+    length[loaded] = r.state.length;
+  }
+  if (loaded < kLanes) {  // too few rays: the scalar walk
+    for (int l = 0; l < loaded; ++l) visits += finish_linear_ray(get_lane8(v, l, due[l]), bits);
+    return visits;
+  }
+
+  for (;;) {
+    __m512d tmin;
+    unsigned ended;
+    while (!(ended = step_lanes8(v, tmin))) {
+      ++iteration;
+      mark_lanes8(v, bits);
+      visits += kLanes;
+    }
+    ++iteration;
+
+    // Rare path: the lanes that ended take the next rays of the stream; a refilled lane stands
+    // on its new ray's origin voxel, so the marking below covers it like the others.
+    alignas(64) double tm[kLanes];
+    alignas(64) std::int64_t idx[kLanes];
+    _mm512_store_pd(tm, tmin);
+    _mm512_store_si512(idx, v.index);
+    unsigned done = 0;
+    for (unsigned m = ended; m; m &= m - 1) {
+      const int l = __builtin_ctz(m);
+      if (idx[l] == end[l] || tm[l] > length[l]) done |= 1u << l;
+    }
+    for (unsigned m = done; m; m &= m - 1) {
+      const int l = __builtin_ctz(m);
+      if (next(r)) {
+        put_lane8(v, l, r);
+        due[l] = iteration + r.state.steps_to_end;
+        end[l] = r.end_index;
+        length[l] = r.state.length;
+        done &= ~(1u << l);
+      } else {  // the stream ran dry: the rays still walking finish one at a time
+        for (unsigned live = ~done & 0xffu; live; live &= live - 1) {
+          const int j = __builtin_ctz(live);
+          const LinearRay rj = get_lane8(v, j, due[j] - iteration);
+          set_bit(bits, rj.index);
+          visits += 1 + finish_linear_ray(rj, bits);
+        }
+        return visits;
+      }
+    }
+    mark_lanes8(v, bits);
+    visits += kLanes;
+  }
+}
+
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
+#undef KNNOCC_TARGET_AVX512
 
 #endif  // KNNOCC_AVX2_LANES
 
@@ -350,6 +520,7 @@ KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* 
 template <class Next>
 std::size_t walk_linear_rays(Next& next, std::uint64_t* bits) {
 #if KNNOCC_AVX2_LANES
+  if (cpu_has_avx512()) return walk_linear_rays_avx512(next, bits);
   if (cpu_has_avx2()) return walk_linear_rays_avx2(next, bits);
 #endif
   return walk_linear_rays_scalar(next, bits);

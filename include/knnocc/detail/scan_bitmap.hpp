@@ -14,6 +14,7 @@
 
 #include "../core/config.hpp"
 #include "../map/brick.hpp"
+#include "huge_pages.hpp"
 
 namespace knnocc::detail {
 
@@ -30,9 +31,11 @@ class ScanBitmap {
     const auto words = static_cast<std::size_t>(n_[0] / 64 * n_[1] * n_[2]);
     if (dirty_) std::fill(bits_.get(), bits_.get() + capacity_, std::uint64_t{0});
     if (capacity_ < words) {
-      // calloc, not a zero-filled vector: large blocks come straight from the kernel as zero
-      // pages, so pages no ray touches cost nothing (a fresh page costs ~2 us here).
-      bits_.reset(static_cast<std::uint64_t*>(std::calloc(words, sizeof(std::uint64_t))));
+      // Zeroed by the kernel, not by a loop: pages no ray touches cost nothing. The box of a scan
+      // is mostly crossed by its rays, so large bitmaps take huge pages (huge_pages.hpp).
+      bits_.reset();
+      bits_ = Bits(static_cast<std::uint64_t*>(big_alloc_zeroed(words * sizeof(std::uint64_t))),
+                   BigFree{words * sizeof(std::uint64_t)});
       capacity_ = bits_ ? words : 0;
       if (!bits_) out_of_memory();
     }
@@ -80,9 +83,7 @@ class ScanBitmap {
   void mark_clean() { dirty_ = false; }
 
  private:
-  struct Free {
-    void operator()(std::uint64_t* p) const { std::free(p); }
-  };
+  using Bits = std::unique_ptr<std::uint64_t[], BigFree>;
   [[noreturn]] static void out_of_memory() {
 #if KNNOCC_HAS_EXCEPTIONS
     throw std::bad_alloc();
@@ -91,7 +92,7 @@ class ScanBitmap {
 #endif
   }
 
-  std::unique_ptr<std::uint64_t[], Free> bits_;
+  Bits bits_;
   std::size_t capacity_ = 0;  // words
   std::int64_t lo_[3] = {0, 0, 0};
   std::int64_t n_[3] = {0, 0, 0};

@@ -100,11 +100,7 @@ inline void put_octree_leaf(OccupancyMap<OcKey>& map, int d, const NodeCorner& c
         for (std::int64_t z = 0; z < bricks; ++z) {
           auto& b =
               map.brick_at(map.brick_slot(layout::pack_brick(b0[0] + x, b0[1] + y, b0[2] + z)));
-          const std::size_t had = static_cast<std::size_t>(b.known.count());
-          b.values.reset();
-          b.known.w.fill(~std::uint64_t{0});
-          b.uniform = v;
-          map.add_known(static_cast<std::size_t>(kBrickVoxels) - had);
+          map.fill_brick(b, v);
         }
     return;
   }
@@ -134,7 +130,7 @@ class OctreeEncoder {
 
   /// The whole file: header and node stream.
   std::string encode() {
-    const std::vector<Brick>& bricks = map_.bricks();
+    const auto& bricks = map_.bricks();
     order_.clear();
     order_.reserve(bricks.size());
     for (std::size_t i = 0; i < bricks.size(); ++i) {

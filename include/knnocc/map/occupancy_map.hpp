@@ -4,6 +4,7 @@
 // Layout: a FlatIndex maps a brick coordinate to a Brick (8x8x8 voxels, see brick.hpp). A brick
 // is the bottom three levels of an octree stored flat: a known-mask (which voxels have a value)
 // and either 512 float log-odds or, after compact(), one value shared by all its known voxels.
+// The 512-value arrays come from the map's ValuePool (large slabs, value_pool.hpp).
 // Coarser octree levels are implicit: the value of a node at depth d is the max over its known
 // leaves (OctoMap's inner-node rule), computed on demand by logodds_at_depth().
 //
@@ -30,6 +31,7 @@
 #include "../core/log_odds.hpp"
 #include "../detail/flat_index.hpp"
 #include "brick.hpp"
+#include "value_pool.hpp"
 
 namespace knnocc {
 
@@ -66,10 +68,10 @@ class OccupancyMap {
   using layout = BrickLayout<Key>;
 
   struct Brick {
-    std::uint64_t coord = 0;          ///< packed brick coordinate (BrickLayout)
-    VoxelMask known;                  ///< voxels that hold a value
-    std::unique_ptr<float[]> values;  ///< 512 log-odds, or null when compacted to `uniform`
-    float uniform = 0.0f;             ///< the value of every known voxel when values is null
+    std::uint64_t coord = 0;  ///< packed brick coordinate (BrickLayout)
+    VoxelMask known;          ///< voxels that hold a value
+    float* values = nullptr;  ///< 512 log-odds (the map's pool), null: `uniform`
+    float uniform = 0.0f;     ///< the value of every known voxel when values is null
 
     float get(int i) const { return values ? values[static_cast<std::size_t>(i)] : uniform; }
   };
@@ -255,8 +257,9 @@ class OccupancyMap {
   // ---- memory --------------------------------------------------------------------------------
 
   /// Compaction (the analogue of OctoMap's pruning): every brick whose known voxels all hold the
-  /// same value drops its 512-value array. Values and queries are unchanged. Returns the number
-  /// of bricks compacted by this call.
+  /// same value drops its 512-value array, and the remaining arrays move into a pool just large
+  /// enough for them. Values and queries are unchanged. Returns the number of bricks compacted by
+  /// this call.
   std::size_t compact() {
     std::size_t n = 0;
     for (Brick& b : bricks_) {
@@ -273,24 +276,37 @@ class OccupancyMap {
         }
       });
       if (!uniform) continue;
-      b.values.reset();
+      b.values = nullptr;  // the old pool goes as a whole below
       b.uniform = u;
       ++n;
+    }
+    if (n > 0) {
+      std::size_t live = 0;
+      for (const Brick& b : bricks_) live += b.values != nullptr;
+      ValuePool packed;
+      packed.reserve(live);
+      for (Brick& b : bricks_) {
+        if (!b.values) continue;
+        float* v = packed.allocate();
+        std::copy(b.values, b.values + kBrickVoxels, v);
+        b.values = v;
+      }
+      pool_ = std::move(packed);
     }
     return n;
   }
 
-  /// Bytes held by the map (bricks, value arrays, hash index, change set).
+  /// Bytes held by the map (bricks, value slabs, hash index, change set).
   std::size_t memory_usage() const {
-    std::size_t bytes = sizeof(*this) + bricks_.capacity() * sizeof(Brick) + index_.memory_usage();
-    for (const Brick& b : bricks_)
-      if (b.values) bytes += kBrickVoxels * sizeof(float);
+    std::size_t bytes = sizeof(*this) + bricks_.capacity() * sizeof(Brick) + index_.memory_usage() +
+                        pool_.memory_usage();
     bytes += changed_.size() * (sizeof(std::uint64_t) + sizeof(bool) + 2 * sizeof(void*));
     return bytes;
   }
 
   void clear() {
     bricks_.clear();
+    pool_.clear();
     index_.reset();
     changed_.clear();
     known_count_ = 0;
@@ -316,8 +332,8 @@ class OccupancyMap {
   Brick& brick_for_write(std::uint64_t coord) { return bricks_[brick_slot_for_write(coord)]; }
 
   /// Slot of the brick with packed coordinate `coord`; a missing brick is created empty, without
-  /// its value array (update_brick allocates it), so that creation stays cheap and serial while
-  /// the updates run in parallel. Slots stay valid until clear().
+  /// its value array (prepare_values or update_brick allocates it). Slots stay valid until
+  /// clear().
   std::uint32_t brick_slot(std::uint64_t coord) {
     bool inserted = false;
     const auto next = static_cast<std::uint32_t>(bricks_.size());
@@ -327,17 +343,33 @@ class OccupancyMap {
   }
   Brick& brick_at(std::uint32_t slot) { return bricks_[slot]; }
 
+  /// Gives `b` its value array when it has none (new or compacted), filled with its uniform value
+  /// where voxels are known. Serial: the pool is shared by all bricks. Writers that update
+  /// different bricks from several threads call it for each brick first.
+  void prepare_values(Brick& b) {
+    if (b.values) return;
+    b.values = pool_.allocate();
+    // Values of unknown voxels are never read, so a new brick needs no filling.
+    if (b.known.any()) std::fill(b.values, b.values + kBrickVoxels, b.uniform);
+  }
+
+  /// Makes every voxel of `b` known with value `v` (clamped), as one compacted brick.
+  void fill_brick(Brick& b, float v) {
+    const auto had = static_cast<std::size_t>(b.known.count());
+    pool_.release(b.values);
+    b.values = nullptr;
+    b.known.w.fill(~std::uint64_t{0});
+    b.uniform = clamp(v);
+    known_count_ += static_cast<std::size_t>(kBrickVoxels) - had;
+  }
+
   /// update_voxel(b, i, delta) for every voxel i in `mask`, without change detection (callers
   /// check change_detection_enabled()) and without the map's voxel count: returns the number of
-  /// voxels that became known, for add_known(). Touches nothing but `b`, so different bricks may
-  /// be updated from different threads at once.
+  /// voxels that became known, for add_known(). Once `b` has its value array (prepare_values) it
+  /// touches nothing but `b`, so different bricks may be updated from different threads at once.
   std::size_t update_brick(Brick& b, const VoxelMask& mask, float delta) {
-    if (!b.values) {  // a compacted (or new, empty) brick: give it its value array first
-      b.values.reset(new float[kBrickVoxels]);
-      // Values of unknown voxels are never read, so a new brick needs no filling.
-      if (b.known.any()) std::fill(b.values.get(), b.values.get() + kBrickVoxels, b.uniform);
-    }
-    float* values = b.values.get();
+    prepare_values(b);  // a compacted (or new, empty) brick: give it its value array first
+    float* values = b.values;
     const float fresh = clamp(0.0f + delta);  // a voxel seen for the first time
     const bool up = delta >= 0, down = delta <= 0;
     std::size_t added = 0;
@@ -361,7 +393,7 @@ class OccupancyMap {
     const std::uint32_t slot = index_.find(coord);
     return slot == detail::FlatIndex::kNone ? nullptr : &bricks_[slot];
   }
-  const std::vector<Brick>& bricks() const { return bricks_; }
+  const detail::BigVector<Brick>& bricks() const { return bricks_; }
 
  private:
   float clamp(float v) const {
@@ -377,7 +409,8 @@ class OccupancyMap {
     if (inserted) {
       Brick& b = bricks_.emplace_back();
       b.coord = coord;
-      b.values.reset(new float[kBrickVoxels]());
+      b.values = pool_.allocate();
+      std::fill(b.values, b.values + kBrickVoxels, 0.0f);
     }
     return slot;
   }
@@ -389,8 +422,8 @@ class OccupancyMap {
     }
     if (!b.values) {
       if (v == b.uniform) return;
-      b.values.reset(new float[kBrickVoxels]);
-      std::fill(b.values.get(), b.values.get() + kBrickVoxels, b.uniform);
+      b.values = pool_.allocate();
+      std::fill(b.values, b.values + kBrickVoxels, b.uniform);
     }
     b.values[static_cast<std::size_t>(i)] = v;
   }
@@ -455,7 +488,8 @@ class OccupancyMap {
 
   grid_type grid_;
   OccupancyParams params_;
-  std::vector<Brick> bricks_;
+  detail::BigVector<Brick> bricks_;
+  ValuePool pool_;  // the bricks' value arrays
   detail::FlatIndex index_;
   std::size_t known_count_ = 0;
   bool change_detection_ = false;

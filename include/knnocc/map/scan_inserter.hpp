@@ -52,6 +52,7 @@
 #include "../core/point3.hpp"
 #include "../core/point_traits.hpp"
 #include "../detail/flat_index.hpp"
+#include "../detail/huge_pages.hpp"
 #include "../detail/key_rounding.hpp"
 #include "../detail/ray_lanes.hpp"
 #include "../detail/scan_bitmap.hpp"
@@ -190,12 +191,12 @@ class ScanInserter {
   };
   // What one thread collected from its share of the points.
   struct Part {
-    std::vector<Ray> rays;                // the rays that visit at least one voxel
-    std::vector<std::uint64_t> hits;      // occupied endpoint keys, packed
-    std::vector<float> hit_logodds;       // insert_rated: the log-odds of each hit
-    std::int64_t key_min[3], key_max[3];  // key box of origin, ray ends and hits
-    std::size_t steps = 0;                // sum of |end - origin|_1 over the rays
-    ScanStats st;                         // points, nonfinite, out_of_range, beyond_max_range
+    detail::BigVector<Ray> rays;            // the rays that visit at least one voxel
+    detail::BigVector<std::uint64_t> hits;  // occupied endpoint keys, packed
+    std::vector<float> hit_logodds;         // insert_rated: the log-odds of each hit
+    std::int64_t key_min[3], key_max[3];    // key box of origin, ray ends and hits
+    std::size_t steps = 0;                  // sum of |end - origin|_1 over the rays
+    ScanStats st;                           // points, nonfinite, out_of_range, beyond_max_range
 
     void clear() {
       rays.clear();
@@ -329,6 +330,13 @@ class ScanInserter {
            (static_cast<std::uint64_t>(k[1]) << Key::depth) | static_cast<std::uint64_t>(k[2]);
   }
 
+  // Room for n elements; grown with an eighth to spare, so that scans of slowly growing size do
+  // not each take a fresh block (fresh pages cost a fault each).
+  template <class Vector>
+  static void reserve(Vector& v, std::size_t n) {
+    if (v.capacity() < n) v.reserve(n + n / 8);
+  }
+
   template <class Points>
   using iterator_of = decltype(std::begin(std::declval<const Points&>()));
 
@@ -373,8 +381,8 @@ class ScanInserter {
         if (w >= parts) return;
         Part& part = workers_[w]->part;
         const std::size_t a = n * w / parts, b = n * (w + 1) / parts;
-        part.rays.reserve(b - a);  // one allocation, not a doubling series
-        part.hits.reserve(b - a);
+        reserve(part.rays, b - a);  // one allocation, not a doubling series
+        reserve(part.hits, b - a);
         collector(w).add_points(first + static_cast<std::ptrdiff_t>(a),
                                 first + static_cast<std::ptrdiff_t>(b),
                                 ratings ? ratings + a : nullptr);
@@ -594,7 +602,7 @@ class ScanInserter {
     if (c >= part_chunks_[threads_]) return false;
     unsigned w = 0;
     while (c >= part_chunks_[w + 1]) ++w;
-    const std::vector<Ray>& rays = workers_[w]->part.rays;
+    const auto& rays = workers_[w]->part.rays;
     const std::size_t begin = (c - part_chunks_[w]) * chunk_;
     first = rays.data() + begin;
     last = rays.data() + std::min(rays.size(), begin + chunk_);
@@ -701,6 +709,7 @@ class ScanInserter {
     for (std::size_t g = 0; g < group_count_; ++g)
       for (BrickUpdate& u : groups_[g]) {
         u.slot = map_->brick_slot(u.coord);
+        map_->prepare_values(map_->brick_at(u.slot));  // the map's pool is serial
         for (std::size_t i = 0; i < u.miss.w.size(); ++i) u.miss.w[i] &= ~u.hit.w[i];
       }
     const float hit_l = hit_l_, miss_l = miss_l_;

@@ -56,6 +56,27 @@ inline double resident_mb() {
          1024.0;
 }
 
+/// Resets this process's peak resident memory to its current resident memory (Linux:
+/// /proc/self/clear_refs); false where that is not possible.
+inline bool reset_peak_rss() {
+  FILE* f = std::fopen("/proc/self/clear_refs", "w");
+  if (!f) return false;
+  const bool ok = std::fputs("5", f) >= 0;
+  return std::fclose(f) == 0 && ok;
+}
+
+/// Peak resident memory of this process (VmHWM), in MB; 0 when /proc is not there.
+inline double peak_rss_mb() {
+  double kb = 0;
+  if (FILE* f = std::fopen("/proc/self/status", "r")) {
+    char line[256];
+    while (std::fgets(line, sizeof line, f))
+      if (std::sscanf(line, "VmHWM: %lf kB", &kb) == 1) break;
+    std::fclose(f);
+  }
+  return kb / 1024.0;
+}
+
 #if KNNOCC_HAVE_OCTOMAP
 inline octomap::Pointcloud octomap_cloud(const std::vector<Point3f>& points) {
   octomap::Pointcloud cloud;

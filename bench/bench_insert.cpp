@@ -129,12 +129,13 @@ Result run_octomap(const Dataset& d, const std::vector<octomap::Pointcloud>& clo
 using knnocc::bench::resident_mb;
 
 // Runs f() in a forked child; returns its result (sent through a pipe) and the peak RSS it added
-// to what the child had when it started (the datasets, inherited from here).
+// to what the child had when it started (the datasets, inherited from here). The child's peak is
+// reset first: a forked child inherits the parent's peak, which would hide a small insertion.
 template <class F>
 std::pair<Result, double> in_child(F f) {
   struct Message {
     Result result;
-    double start_mb;
+    double added_mb;
   };
   int fd[2];
   if (pipe(fd) != 0) std::exit(2);
@@ -142,8 +143,14 @@ std::pair<Result, double> in_child(F f) {
   if (pid == 0) {
     Message m;
     malloc_trim(0);  // heap left free by earlier runs would hide the child's own allocations
-    m.start_mb = resident_mb();
+    const bool reset = knnocc::bench::reset_peak_rss();
+    const double start_mb = resident_mb();
     m.result = f();
+    struct rusage ru {};
+    getrusage(RUSAGE_SELF, &ru);
+    // Without the reset (not Linux) the peak since the fork is all there is.
+    const double peak_mb = reset ? knnocc::bench::peak_rss_mb() : ru.ru_maxrss / 1024.0;
+    m.added_mb = peak_mb - start_mb;
     if (write(fd[1], &m, sizeof m) != static_cast<ssize_t>(sizeof m)) _exit(1);
     _exit(0);
   }
@@ -152,9 +159,8 @@ std::pair<Result, double> in_child(F f) {
   if (read(fd[0], &m, sizeof m) != static_cast<ssize_t>(sizeof m)) m = Message{};
   close(fd[0]);
   int status = 0;
-  struct rusage ru {};
-  wait4(pid, &status, 0, &ru);
-  return {m.result, ru.ru_maxrss / 1024.0 - m.start_mb};
+  waitpid(pid, &status, 0);
+  return {m.result, m.added_mb};
 }
 
 }  // namespace

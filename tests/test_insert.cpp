@@ -4,6 +4,8 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <list>
 #include <map>
 #include <set>
 #include <vector>
@@ -185,4 +187,52 @@ TEST_CASE("insert.point_types_agree") {
   knnocc::insert_point_cloud(c, std::array<double, 3>{0, 0, 0}, arr);
   CHECK(dump(a) == dump(b));
   CHECK(dump(a) == dump(c));
+}
+
+TEST_CASE_TEMPLATE("insert.large_scans_in_chunks_match_one_piece", Key, OcKey, WideKey) {
+  // Scans of more than one chunk (ScanInserter collects and walks large scans 8192 points at a
+  // time, applies them once): against the set-based oracle and against the one-piece path (a
+  // std::list has no random access, so it is inserted in one piece). NaN/Inf points, points on
+  // voxel borders, points beyond max_range and in the origin's voxel; two scans with overlapping
+  // voxels, so an update applied twice in one scan would show.
+  knnocc::test::Rng rng(41);
+  std::uniform_real_distribution<float> u(-3.f, 3.f);
+  std::uniform_int_distribution<int> cell(-30, 30);
+  for (const double max_range : {-1.0, 2.5}) {
+    for (const unsigned threads : {1u, 2u}) {
+      CAPTURE(max_range);
+      CAPTURE(threads);
+      OccupancyMap<Key> chunked(0.1), one_piece(0.1), oracle(0.1);
+      knnocc::ScanInserter<Key> a(chunked, {}, threads), b(one_piece, {}, threads);
+      for (int scan = 0; scan < 2; ++scan) {
+        const Point3f origin{0.3f * static_cast<float>(scan), 0.05f, 0.1f};
+        std::vector<Point3f> pts;
+        for (int i = 0; i < 20000; ++i) {
+          Point3f p{u(rng), u(rng), u(rng) * 0.5f};
+          if (i % 7 == 0)  // on voxel borders
+            p = {0.1f * static_cast<float>(cell(rng)), 0.1f * static_cast<float>(cell(rng)), p.z};
+          if (i % 997 == 0) p.x = std::numeric_limits<float>::quiet_NaN();
+          if (i % 1999 == 0) p.y = std::numeric_limits<float>::infinity();
+          if (i % 1499 == 0) p = origin;
+          pts.push_back(p);
+        }
+        const auto sa = a.insert_point_cloud(origin, pts, max_range);
+        const std::list<Point3f> listed(pts.begin(), pts.end());
+        const auto sb = b.insert_point_cloud(origin, listed, max_range);
+        reference_insert(oracle, origin, pts, max_range, false);
+        CHECK(sa.chunks == 3);
+        CHECK(sb.chunks == 1);
+        CHECK(sa.points == sb.points);
+        CHECK(sa.nonfinite == sb.nonfinite);
+        CHECK(sa.nonfinite > 0);
+        CHECK(sa.beyond_max_range == sb.beyond_max_range);
+        CHECK(sa.ray_keys == sb.ray_keys);
+        CHECK(sa.occupied_voxels == sb.occupied_voxels);
+        CHECK(sa.free_voxels == sb.free_voxels);
+      }
+      CHECK(dump(chunked) == dump(one_piece));
+      CHECK(dump(chunked) == dump(oracle));
+      CHECK(chunked.num_voxels() > 10000);
+    }
+  }
 }

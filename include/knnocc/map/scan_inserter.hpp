@@ -89,6 +89,9 @@ struct ScanStats {
   std::size_t occupied_voxels = 0;   ///< voxels that received the hit update (or a rated sum)
   std::size_t free_voxels = 0;       ///< voxels that received the miss update
   bool origin_valid = true;          ///< false: origin NaN/Inf, nothing was inserted
+  /// Pieces the points were collected and walked in: large scans go kChunkPoints (8192) points at
+  /// a time, which bounds the per-point buffers (the map gets the same updates either way).
+  std::size_t chunks = 0;
 };
 
 template <class Key = OcKey, class Model = OctoMapModel>
@@ -141,8 +144,12 @@ class ScanInserter {
     rated_ = false;
     hit_l_ = model_.hit_logodds();
     miss_l_ = model_.miss_logodds();
+    if constexpr (random_access<Points>) {
+      if (!discretize && insert_chunked(points, max_range, st)) return st;
+    }
     collect(points, max_range, discretize, nullptr, st);
     walk(st);
+    st.chunks = 1;
     return st;
   }
 
@@ -171,6 +178,7 @@ class ScanInserter {
     miss_l_ = model_.miss_logodds();
     collect(points, max_range, false, ratings.data(), st);
     walk(st);
+    st.chunks = 1;
     return st;
   }
 
@@ -340,15 +348,37 @@ class ScanInserter {
   template <class Points>
   using iterator_of = decltype(std::begin(std::declval<const Points&>()));
 
+  template <class Points>
+  static constexpr bool random_access =
+      std::is_base_of_v<std::random_access_iterator_tag,
+                        typename std::iterator_traits<iterator_of<Points>>::iterator_category>;
+
   // Fills the workers' Parts (in parallel when the points allow random access) and merges their
   // boxes and counts: the scan's rays are the union of all Parts' rays.
   template <class Points>
   void collect(const Points& points, double max_range, bool discretize,
                const EndpointRating* ratings, ScanStats& st) {
-    const Grid<Key>& grid = map_->grid();
+    start_collect();
+    if (discretize) {
+      collect_discretized(points, collector(0, max_range));
+    } else if constexpr (random_access<Points>) {
+      const auto first = std::begin(points);
+      collect_range(first, static_cast<std::size_t>(std::distance(first, std::end(points))),
+                    max_range, ratings);
+    } else {
+      collector(0, max_range).add_points(std::begin(points), std::end(points), ratings);
+    }
+    merge_parts(st, true);
+  }
+
+  // The origin's key; empty Parts.
+  void start_collect() {
     Key ko;
-    origin_in_range_ = grid.point_to_key(origin_, ko);
+    origin_in_range_ = map_->grid().point_to_key(origin_, ko);
     for (int a = 0; a < 3; ++a) origin_key_[a] = ko[a];
+    clear_parts();
+  }
+  void clear_parts() {
     for (unsigned w = 0; w < threads_; ++w) {
       Part& part = workers_[w]->part;
       part.clear();
@@ -357,64 +387,123 @@ class ScanInserter {
         part.key_max[a] = origin_in_range_ ? origin_key_[a] : -1;
       }
     }
-    auto collector = [&](unsigned w) {
-      return Collector{origin_,
-                       origin_key_,
-                       origin_in_range_,
-                       max_range,
-                       detail::KeyRounding<Key>(grid),
-                       workers_[w]->part};
+  }
+  Collector collector(unsigned w, double max_range) {
+    return Collector{origin_,
+                     origin_key_,
+                     origin_in_range_,
+                     max_range,
+                     detail::KeyRounding<Key>(map_->grid()),
+                     workers_[w]->part};
+  }
+
+  // Points [first, first + n) into the Parts: equal shares per thread (one thread for few points).
+  template <class It>
+  void collect_range(It first, std::size_t n, double max_range, const EndpointRating* ratings) {
+    // Threads only for scans large enough to pay for waking them.
+    const unsigned parts = n >= 8192 ? threads_ : 1;
+    auto job = [&](unsigned w) {
+      if (w >= parts) return;
+      Part& part = workers_[w]->part;
+      const std::size_t a = n * w / parts, b = n * (w + 1) / parts;
+      reserve(part.rays, b - a);  // one allocation, not a doubling series
+      reserve(part.hits, b - a);
+      collector(w, max_range)
+          .add_points(first + static_cast<std::ptrdiff_t>(a),
+                      first + static_cast<std::ptrdiff_t>(b), ratings ? ratings + a : nullptr);
     };
+    if (parts == 1)
+      job(0u);
+    else
+      run(job);
+  }
 
-    using It = iterator_of<Points>;
-    constexpr bool random_access =
-        std::is_base_of_v<std::random_access_iterator_tag,
-                          typename std::iterator_traits<It>::iterator_category>;
-    if (discretize) {
-      collect_discretized(points, collector(0));
-    } else if constexpr (random_access) {
-      const It first = std::begin(points);
-      const auto n = static_cast<std::size_t>(std::distance(first, std::end(points)));
-      // Threads only for scans large enough to pay for waking them.
-      const unsigned parts = n >= 8192 ? threads_ : 1;
-      auto job = [&](unsigned w) {
-        if (w >= parts) return;
-        Part& part = workers_[w]->part;
-        const std::size_t a = n * w / parts, b = n * (w + 1) / parts;
-        reserve(part.rays, b - a);  // one allocation, not a doubling series
-        reserve(part.hits, b - a);
-        collector(w).add_points(first + static_cast<std::ptrdiff_t>(a),
-                                first + static_cast<std::ptrdiff_t>(b),
-                                ratings ? ratings + a : nullptr);
-      };
-      if (parts == 1)
-        job(0u);
-      else
-        run(job);
-    } else {
-      collector(0).add_points(std::begin(points), std::end(points), ratings);
-    }
-
+  // Sums the Parts' counts into st and the scan totals; `box`: the key box too.
+  void merge_parts(ScanStats& st, bool box) {
     steps_ = 0;
     rays_total_ = hits_total_ = 0;
-    for (int a = 0; a < 3; ++a) {
-      key_min_[a] = Key::extent;
-      key_max_[a] = -1;
-    }
+    if (box)
+      for (int a = 0; a < 3; ++a) {
+        key_min_[a] = Key::extent;
+        key_max_[a] = -1;
+      }
     for (unsigned w = 0; w < threads_; ++w) {
       const Part& part = workers_[w]->part;
       steps_ += part.steps;
       rays_total_ += part.rays.size();
       hits_total_ += part.hits.size();
-      for (int a = 0; a < 3; ++a) {
-        key_min_[a] = std::min(key_min_[a], part.key_min[a]);
-        key_max_[a] = std::max(key_max_[a], part.key_max[a]);
-      }
+      if (box)
+        for (int a = 0; a < 3; ++a) {
+          key_min_[a] = std::min(key_min_[a], part.key_min[a]);
+          key_max_[a] = std::max(key_max_[a], part.key_max[a]);
+        }
       st.points += part.st.points;
       st.nonfinite += part.st.nonfinite;
       st.out_of_range += part.st.out_of_range;
       st.beyond_max_range += part.st.beyond_max_range;
     }
+  }
+
+  // ---- large scans in chunks ------------------------------------------------------------
+  //
+  // The per-point buffers (rays and hits, 32 bytes a point) would outweigh a small map, so a large
+  // scan whose dense box is known in advance goes through collect and walk a chunk of points at a
+  // time, into the same bitmaps, and is applied once at the end: the same voxels, each updated
+  // once, as in one piece. The box comes from the points' coordinate bounds (keys are monotonic
+  // in coordinates, and a ray truncated at max_range ends between origin and point), grown by a
+  // voxel for rounding.
+  static constexpr std::size_t kChunkPoints = 8192;
+
+  template <class Points>
+  bool insert_chunked(const Points& points, double max_range, ScanStats& st) {
+    const auto first = std::begin(points);
+    const auto n = static_cast<std::size_t>(std::distance(first, std::end(points)));
+    if (n <= kChunkPoints) return false;
+    start_collect();
+    if (!origin_in_range_) return false;
+    float lo[3] = {origin_.x, origin_.y, origin_.z}, hi[3] = {origin_.x, origin_.y, origin_.z};
+    // A sample of the rays' lengths in voxels for dense_fits (it only picks the faster path).
+    const double inv = 1.0 / map_->resolution();
+    double sampled = 0;
+    constexpr std::size_t kSample = 8;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Point3f p = to_point3f(first[static_cast<std::ptrdiff_t>(i)]);
+      if (!detail::finite(p)) continue;
+      lo[0] = std::min(lo[0], p.x);
+      lo[1] = std::min(lo[1], p.y);
+      lo[2] = std::min(lo[2], p.z);
+      hi[0] = std::max(hi[0], p.x);
+      hi[1] = std::max(hi[1], p.y);
+      hi[2] = std::max(hi[2], p.z);
+      if (i % kSample == 0) {
+        double d =
+            std::fabs(p.x - origin_.x) + std::fabs(p.y - origin_.y) + std::fabs(p.z - origin_.z);
+        if (max_range > 0) d = std::min(d, 1.7320508075688772 * max_range);  // L1 <= sqrt(3) L2
+        sampled += d;
+      }
+    }
+    Key klo, khi;
+    if (!map_->grid().point_to_key(Point3f{lo[0], lo[1], lo[2]}, klo) ||
+        !map_->grid().point_to_key(Point3f{hi[0], hi[1], hi[2]}, khi))
+      return false;  // points outside the key range: the one-piece path counts them
+    for (int a = 0; a < 3; ++a) {
+      key_min_[a] = std::int64_t{klo[a]} - 1;
+      key_max_[a] = std::int64_t{khi[a]} + 1;
+    }
+    steps_ = static_cast<std::size_t>(sampled * inv * kSample);
+    if (!dense_fits()) return false;
+
+    prepare_dense();
+    for (std::size_t done = 0; done < n; done += kChunkPoints) {
+      if (done > 0) clear_parts();
+      collect_range(first + static_cast<std::ptrdiff_t>(done), std::min(kChunkPoints, n - done),
+                    max_range, nullptr);
+      merge_parts(st, false);
+      mark_dense(st);
+      ++st.chunks;
+    }
+    apply_dense(st);
+    return true;
   }
 
   // discretize: the distinct endpoint voxels, then their centres as the points (in one thread).
@@ -483,14 +572,25 @@ class ScanInserter {
   }
 
   void walk_dense(ScanStats& st) {
+    prepare_dense();
+    mark_dense(st);
+    apply_dense(st);
+  }
+
+  // The bitmaps of the dense box (box_lo_, box_size_), all zero.
+  void prepare_dense() {
     hit_bits_.reshape(box_lo_, box_size_);
+    for (unsigned w = 0; w < threads_; ++w) workers_[w]->miss.reshape(box_lo_, box_size_);
+  }
+
+  // The Parts' hits and rays into the bitmaps.
+  void mark_dense(ScanStats& st) {
     for (unsigned w = 0; w < threads_; ++w)
       for (const std::uint64_t packed : workers_[w]->part.hits) {
         const Key k = Key::unpack(packed);
         detail::set_bit(hit_bits_.words(), hit_bits_.index(k[0], k[1], k[2]));
       }
-    for (unsigned w = 0; w < threads_; ++w) workers_[w]->miss.reshape(box_lo_, box_size_);
-
+    if (rays_total_ == 0) return;
     plan_chunks();
     const detail::RayFan fan(map_->grid(), origin_, origin_key_, box_lo_,
                              {1, box_size_[0], box_size_[0] * box_size_[1]});
@@ -517,7 +617,6 @@ class ScanInserter {
     };
     run(job);
     for (unsigned w = 0; w < threads_; ++w) st.ray_keys += workers_[w]->visits;
-    apply_dense(st);
   }
 
   void walk_hashed(ScanStats& st) {

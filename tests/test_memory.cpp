@@ -13,8 +13,9 @@
 using knnocc::OcKey;
 
 TEST_CASE("memory.big_alloc_small_and_large_blocks") {
-  for (const std::size_t bytes : {std::size_t{1}, std::size_t{4096}, knnocc::detail::kHugePage - 8,
-                                  knnocc::detail::kHugePage, 3 * knnocc::detail::kHugePage + 1}) {
+  for (const std::size_t bytes :
+       {std::size_t{1}, std::size_t{4096}, knnocc::detail::kHugeMin - 8, knnocc::detail::kHugeMin,
+        knnocc::detail::kHugePage, 3 * knnocc::detail::kHugePage + 1}) {
     CAPTURE(bytes);
     auto* p = static_cast<unsigned char*>(knnocc::detail::big_alloc_zeroed(bytes));
     REQUIRE(p != nullptr);
@@ -25,7 +26,7 @@ TEST_CASE("memory.big_alloc_small_and_large_blocks") {
     p[0] = 1;
     p[bytes - 1] = 2;  // the whole block is writable
 #if KNNOCC_HUGE_PAGES
-    if (bytes >= knnocc::detail::kHugePage)  // whole huge pages, 2 MB aligned
+    if (bytes >= knnocc::detail::kHugeMin)  // whole huge pages, 2 MB aligned
       CHECK(reinterpret_cast<std::uintptr_t>(p) % knnocc::detail::kHugePage == 0);
 #endif
     CHECK(knnocc::detail::big_size(bytes) >= bytes);

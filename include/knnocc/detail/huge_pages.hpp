@@ -4,11 +4,12 @@
 //
 // Every fresh 4 KB page costs a page fault: ~2 us on bare metal, 10-13 us measured on the
 // project's virtual machine, where faults dominated inserting a fresh map (a 42 MB map is 10,000
-// faults). On Linux a block of at least kHugePage bytes is taken 2 MB aligned from mmap and
-// advised as transparent huge pages (MADV_HUGEPAGE, honoured when THP is "always" or "madvise"):
-// one fault then maps 2 MB (0.25 us per 4 KB measured). Smaller blocks, other systems, and builds
-// with KNNOCC_NO_HUGE_PAGES defined use malloc. Only for memory that is filled densely: a huge
-// page is resident as a whole once any byte of it is touched.
+// faults). On Linux a block of at least kHugeMin (1 MB) is rounded up to whole 2 MB pages, taken
+// 2 MB aligned from mmap and advised as transparent huge pages (MADV_HUGEPAGE, honoured when THP
+// is "always" or "madvise"): one fault then maps 2 MB (0.25 us per 4 KB measured). Smaller
+// blocks, other systems, and builds with KNNOCC_NO_HUGE_PAGES defined use malloc. Only for memory
+// that is filled densely: a huge page is resident as a whole once any byte of it is touched, so a
+// block costs at most 1 MB more resident memory than its size.
 
 #include <atomic>
 #include <cstddef>
@@ -28,13 +29,14 @@
 namespace knnocc::detail {
 
 inline constexpr std::size_t kHugePage = std::size_t{2} << 20;
+inline constexpr std::size_t kHugeMin = std::size_t{1} << 20;  ///< smallest block on huge pages
 
 /// Number of big_alloc calls so far (the tests check that warmed-up writers make none).
 inline std::atomic<std::size_t> big_allocations{0};
 
 /// Bytes of `bytes` rounded up the way big_alloc maps them (whole huge pages when large).
 inline std::size_t big_size(std::size_t bytes) {
-  return bytes >= kHugePage ? (bytes + kHugePage - 1) / kHugePage * kHugePage : bytes;
+  return bytes >= kHugeMin ? (bytes + kHugePage - 1) / kHugePage * kHugePage : bytes;
 }
 
 /// At least `bytes` bytes (uninitialised; zero when they come fresh from mmap), or null.
@@ -42,7 +44,7 @@ inline std::size_t big_size(std::size_t bytes) {
 inline void* big_alloc(std::size_t bytes) {
   big_allocations.fetch_add(1, std::memory_order_relaxed);
 #if KNNOCC_HUGE_PAGES
-  if (bytes >= kHugePage) {
+  if (bytes >= kHugeMin) {
     const std::size_t size = big_size(bytes);
     // Over-map by one huge page, then unmap the unaligned head and the tail.
     void* raw =
@@ -63,7 +65,7 @@ inline void* big_alloc(std::size_t bytes) {
 /// big_alloc, zero-filled (fresh mmap memory is zero already; small blocks come from calloc).
 inline void* big_alloc_zeroed(std::size_t bytes) {
 #if KNNOCC_HUGE_PAGES
-  if (bytes >= kHugePage) return big_alloc(bytes);
+  if (bytes >= kHugeMin) return big_alloc(bytes);
 #endif
   big_allocations.fetch_add(1, std::memory_order_relaxed);
   return std::calloc(bytes == 0 ? 1 : bytes, 1);
@@ -72,7 +74,7 @@ inline void* big_alloc_zeroed(std::size_t bytes) {
 inline void big_free(void* p, std::size_t bytes) {
   if (!p) return;
 #if KNNOCC_HUGE_PAGES
-  if (bytes >= kHugePage) {
+  if (bytes >= kHugeMin) {
     munmap(p, big_size(bytes));
     return;
   }

@@ -3,7 +3,7 @@
 //
 // One allocation per brick made a fresh map pay malloc's bookkeeping and a 4 KB page fault per two
 // bricks. The pool hands out arrays in creation order from slabs that grow geometrically (64 KB
-// up to 2 MB, then 2 MB each), so small maps stay small and large maps are mapped 2 MB at a time
+// to 512 KB, then 2 MB each), so small maps stay small and large maps are mapped 2 MB at a time
 // (detail/huge_pages.hpp). Arrays given back (compacted bricks) are reused first. The pool owns
 // the memory: arrays stay valid until clear() or the pool's destruction, and a moved pool keeps
 // them at the same addresses.
@@ -75,7 +75,8 @@ class ValuePool {
   std::size_t next_slab_arrays() const {
     std::size_t arrays = kFirstSlabArrays;
     for (std::size_t i = 0; i < slabs_.size() && arrays < kMaxSlabArrays; ++i) arrays *= 2;
-    return arrays;
+    // A slab that would take huge pages takes a whole one.
+    return arrays * kArrayBytes >= detail::kHugeMin ? kMaxSlabArrays : arrays;
   }
 
   void add_slab(std::size_t arrays) {

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "../../core/point_traits.hpp"
+#include "../../detail/huge_pages.hpp"
 #include "../atomic_file.hpp"
 #include "../error.hpp"
 
@@ -29,8 +30,8 @@ namespace knnocc::io {
 
 namespace detail {
 
-// Whole file in one allocation and one fread; always followed by a '\0' so strtod-style
-// fallbacks can never run off the end.
+// Whole file in one allocation (a large one on huge pages: it is filled completely) and one
+// fread; always followed by a '\0' so strtod-style fallbacks can never run off the end.
 class FileBuffer {
  public:
   const char* data() const noexcept { return data_.get(); }
@@ -39,7 +40,7 @@ class FileBuffer {
 
  private:
   friend FileBuffer read_file(const std::string& path);
-  std::unique_ptr<char[]> data_;
+  std::unique_ptr<char[], knnocc::detail::BigFree> data_;
   std::size_t size_ = 0;
 };
 
@@ -59,8 +60,14 @@ inline FileBuffer read_file(const std::string& path) {
   if (!f) throw Error(path, "cannot open: " + errno_text(errno));
   FileBuffer buf;
   buf.size_ = static_cast<std::size_t>(size);
-  // No make_unique: value-initialising a large buffer costs a full extra pass.
-  buf.data_.reset(new char[buf.size_ + 1]);
+  // Not value-initialised: that would cost a full extra pass.
+  buf.data_ = std::unique_ptr<char[], knnocc::detail::BigFree>(
+      static_cast<char*>(knnocc::detail::big_alloc(buf.size_ + 1)),
+      knnocc::detail::BigFree{buf.size_ + 1});
+  if (!buf.data_) {
+    std::fclose(f);
+    throw Error(path, "cannot read: out of memory for " + std::to_string(buf.size_) + " bytes");
+  }
   const std::size_t got = buf.size_ ? std::fread(buf.data_.get(), 1, buf.size_, f) : 0;
   const int read_err = std::ferror(f) ? errno : 0;
   std::fclose(f);

@@ -1,5 +1,6 @@
-// The core headers built with -fno-exceptions -fno-rtti (embedded builds): keys, map, DDA, both
-// sensor models, Welford, tracker and mapper work; a caller error prints one line and aborts.
+// The core headers built with -fno-exceptions -fno-rtti and KNNOCC_NO_HUGE_PAGES (embedded
+// builds): keys, map, DDA, both sensor models, Welford, tracker and mapper work; a caller error
+// prints one line and aborts.
 //   knnocc_noexcept_smoke            runs the smoke checks, exit 0
 //   knnocc_noexcept_smoke invalid    passes an invalid k-NN parameter: message, then abort()
 
@@ -57,6 +58,19 @@ int main(int argc, char** argv) {
   Mapper<OctoMapModel> octo(0.1);
   octo.insert_keyframe(Point3d{0, 0, 0}, pts);
   SMOKE_CHECK(octo.map().count_voxels().occupied > 0);
+
+  // A scan large enough to go in chunks, with large scratch blocks (malloc here, not mmap).
+  std::vector<Point3f> scan;
+  for (int i = 0; i < 20000; ++i)
+    scan.push_back({8.0f + 0.001f * static_cast<float>(i % 97),
+                    -6.0f + 0.0006f * static_cast<float>(i), 0.3f * static_cast<float>(i % 7)});
+  OccupancyMap<OcKey> big(0.05);
+  ScanInserter<OcKey> inserter(big);
+  const ScanStats st = inserter.insert_point_cloud(Point3f{0.0f, 0.0f, 1.0f}, scan);
+  SMOKE_CHECK(st.chunks == 3);
+  SMOKE_CHECK(st.ray_keys > 2000000);
+  big.compact();
+  SMOKE_CHECK(big.count_voxels().free > 10000);
 
   // k-NN model: tracker + mapper.
   Mapper<KnnModel> knn(0.1);

@@ -65,6 +65,13 @@ class FlatIndex {
     mask_ = 0;
   }
 
+  /// Room for n keys without growing.
+  void reserve(std::size_t n) {
+    std::size_t cap = keys_.empty() ? 64 : keys_.size();
+    while (2 * n > cap) cap *= 2;
+    if (cap > keys_.size()) grow(cap);
+  }
+
   std::size_t memory_usage() const {
     return keys_.capacity() * sizeof(std::uint64_t) + values_.capacity() * sizeof(std::uint32_t);
   }
@@ -80,8 +87,8 @@ class FlatIndex {
     return static_cast<std::size_t>(key) & mask_;
   }
 
-  void grow() {
-    const std::size_t cap = keys_.empty() ? 64 : 2 * keys_.size();
+  void grow() { grow(keys_.empty() ? 64 : 2 * keys_.size()); }
+  void grow(std::size_t cap) {
     BigVector<std::uint64_t> old_keys(cap, kEmpty);
     BigVector<std::uint32_t> old_values(cap);
     old_keys.swap(keys_);

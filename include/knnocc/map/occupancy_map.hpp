@@ -343,6 +343,14 @@ class OccupancyMap {
   }
   Brick& brick_at(std::uint32_t slot) { return bricks_[slot]; }
 
+  /// Room for `more` bricks beyond those stored: one allocation instead of a doubling series
+  /// (growth stays geometric when called repeatedly).
+  void reserve_bricks(std::size_t more) {
+    const std::size_t need = bricks_.size() + more;
+    if (bricks_.capacity() < need) bricks_.reserve(std::max(need, 2 * bricks_.capacity()));
+    index_.reserve(need);
+  }
+
   /// Gives `b` its value array when it has none (new or compacted), filled with its uniform value
   /// where voxels are known. Serial: the pool is shared by all bricks. Writers that update
   /// different bricks from several threads call it for each brick first.

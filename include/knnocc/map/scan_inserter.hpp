@@ -733,6 +733,11 @@ class ScanInserter {
         std::min<std::int64_t>(rows, threads_ == 1 ? 1 : 8 * std::int64_t{threads_}));
     const auto rows_per_group = (static_cast<std::size_t>(rows) + groups - 1) / groups;
     start_groups(groups);
+    // Room for every brick a group could hold (capped): no doubling series of copies and fresh
+    // pages in a cold process; pages of the reserve stay untouched until written.
+    const auto most = static_cast<std::size_t>(std::min<std::int64_t>(
+        std::int64_t{1} << 16, static_cast<std::int64_t>(rows_per_group) * nbx));
+    for (std::size_t g = 0; g < groups; ++g) groups_[g].reserve(most);
     for (unsigned w = 0; w < threads_; ++w) {  // here, not in the job: a thread may get no group
       workers_[w]->row_hit.resize(static_cast<std::size_t>(nbx));
       workers_[w]->row_miss.resize(static_cast<std::size_t>(nbx));
@@ -805,6 +810,11 @@ class ScanInserter {
 
   // Occupied wins; every touched voxel gets exactly one update.
   void update_groups(ScanStats& st) {
+    if (map_->num_bricks() == 0) {  // a fresh map: every touched brick is new
+      std::size_t touched = 0;
+      for (std::size_t g = 0; g < group_count_; ++g) touched += groups_[g].size();
+      map_->reserve_bricks(touched);
+    }
     for (std::size_t g = 0; g < group_count_; ++g)
       for (BrickUpdate& u : groups_[g]) {
         u.slot = map_->brick_slot(u.coord);

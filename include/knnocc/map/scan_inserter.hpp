@@ -733,11 +733,12 @@ class ScanInserter {
         std::min<std::int64_t>(rows, threads_ == 1 ? 1 : 8 * std::int64_t{threads_}));
     const auto rows_per_group = (static_cast<std::size_t>(rows) + groups - 1) / groups;
     start_groups(groups);
-    // Room for every brick a group could hold (capped): no doubling series of copies and fresh
-    // pages in a cold process; pages of the reserve stay untouched until written.
-    const auto most = static_cast<std::size_t>(std::min<std::int64_t>(
-        std::int64_t{1} << 16, static_cast<std::int64_t>(rows_per_group) * nbx));
-    for (std::size_t g = 0; g < groups; ++g) groups_[g].reserve(most);
+    // One thread, one group: room for every brick of the box (capped), so a cold process does not
+    // grow it through a doubling series of copies and fresh pages (the reserve stays untouched
+    // until written). Not with threads: many large reserves made the threads' mapping churn.
+    if (groups == 1)
+      groups_[0].reserve(
+          static_cast<std::size_t>(std::min<std::int64_t>(std::int64_t{1} << 16, rows * nbx)));
     for (unsigned w = 0; w < threads_; ++w) {  // here, not in the job: a thread may get no group
       workers_[w]->row_hit.resize(static_cast<std::size_t>(nbx));
       workers_[w]->row_miss.resize(static_cast<std::size_t>(nbx));

@@ -9,7 +9,8 @@
 // is "always" or "madvise"): one fault then maps 2 MB (0.25 us per 4 KB measured). Smaller
 // blocks, other systems, and builds with KNNOCC_NO_HUGE_PAGES defined use malloc. Only for memory
 // that is filled densely: a huge page is resident as a whole once any byte of it is touched, so a
-// block costs at most 1 MB more resident memory than its size.
+// block costs up to 2 MB more resident memory than its size. Define KNNOCC_NO_HUGE_PAGES for the
+// whole program or not at all (big_alloc and big_free must agree).
 
 #include <atomic>
 #include <cstddef>
@@ -36,6 +37,7 @@ inline std::atomic<std::size_t> big_allocations{0};
 
 /// Bytes of `bytes` rounded up the way big_alloc maps them (whole huge pages when large).
 inline std::size_t big_size(std::size_t bytes) {
+  if (bytes > ~std::size_t{0} - 2 * kHugePage) return bytes;  // big_alloc refuses these
   return bytes >= kHugeMin ? (bytes + kHugePage - 1) / kHugePage * kHugePage : bytes;
 }
 
@@ -44,6 +46,7 @@ inline std::size_t big_size(std::size_t bytes) {
 inline void* big_alloc(std::size_t bytes) {
   big_allocations.fetch_add(1, std::memory_order_relaxed);
 #if KNNOCC_HUGE_PAGES
+  if (bytes > ~std::size_t{0} - 2 * kHugePage) return nullptr;  // would wrap around
   if (bytes >= kHugeMin) {
     const std::size_t size = big_size(bytes);
     // Over-map by one huge page, then unmap the unaligned head and the tail.
@@ -55,7 +58,9 @@ inline void* big_alloc(std::size_t bytes) {
         (kHugePage - reinterpret_cast<std::size_t>(base) % kHugePage) % kHugePage;
     if (head) munmap(base, head);
     munmap(base + head + size, kHugePage - head);
+#if defined(MADV_HUGEPAGE)
     madvise(base + head, size, MADV_HUGEPAGE);  // advice only: ignored where THP is off
+#endif
     return base + head;
   }
 #endif
@@ -92,6 +97,7 @@ struct BigFree {
 /// std::allocator with big_alloc: for vectors that are filled densely and may grow large.
 template <class T>
 struct BigAllocator {
+  static_assert(alignof(T) <= alignof(std::max_align_t), "malloc's alignment is all it promises");
   using value_type = T;
   BigAllocator() = default;
   template <class U>

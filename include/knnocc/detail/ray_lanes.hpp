@@ -9,10 +9,10 @@
 // the CPU's predictor. On x86-64 CPUs with AVX2 (checked at run time) four rays walk at once, one
 // per 64-bit lane, with walk_ray()'s comparisons in branch-free form: the same comparisons on the
 // same doubles, so exactly the same voxels; CPUs with AVX-512F walk eight rays at once the same
-// way. A lane whose ray ends takes the next ray of the stream; when the stream runs dry the
-// remaining rays finish on the scalar walk. The set-up of the rays (setup_walk) goes four at a
-// time as well. Elsewhere (no AVX2, other architectures, or KNNOCC_NO_SIMD defined) everything
-// runs on the scalar code, with the same results.
+// way (KNNOCC_NO_AVX512 keeps them on four lanes). A lane whose ray ends takes the next ray of
+// the stream; when the stream runs dry the remaining rays finish on the scalar walk. The set-up
+// of the rays (setup_walk) goes four at a time as well. Elsewhere (no AVX2, other architectures,
+// or KNNOCC_NO_SIMD defined) everything runs on the scalar code, with the same results.
 
 #include <cstddef>
 #include <cstdint>
@@ -20,6 +20,12 @@
 #include <limits>
 
 #include "../raycast/dda.hpp"
+
+#if defined(__GNUC__) || defined(__clang__)
+#define KNNOCC_NOINLINE_SETUP __attribute__((noinline))
+#else
+#define KNNOCC_NOINLINE_SETUP
+#endif
 
 #if !defined(KNNOCC_NO_SIMD) && (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__)
 #define KNNOCC_AVX2_LANES 1
@@ -523,16 +529,21 @@ KNNOCC_TARGET_AVX512 std::size_t walk_linear_rays_avx512(Next& next, std::uint64
 template <class Next>
 std::size_t walk_linear_rays(Next& next, std::uint64_t* bits) {
 #if KNNOCC_AVX2_LANES
+#if !defined(KNNOCC_NO_AVX512)
   if (cpu_has_avx512()) return walk_linear_rays_avx512(next, bits);
+#endif
   if (cpu_has_avx2()) return walk_linear_rays_avx2(next, bits);
 #endif
   return walk_linear_rays_scalar(next, bits);
 }
 
-/// setup_linear_ray() for rays[0..n), four at a time on AVX2 machines.
+/// setup_linear_ray() for rays[0..n), four at a time on AVX2 machines. Never inlined: callers
+/// call it from inside the AVX-512 walk (the ray stream's refill), whose target enables FMA, and
+/// contracting OctoMap's float arithmetic there (-ffp-contract=fast, GCC's default for gnu++17,
+/// or clang's default "on") would change bits; compiled on its own it keeps the caller's flags.
 template <class Key>
-void setup_linear_rays(const Grid<Key>& grid, const RayFan& fan, const RayEnd* rays, std::size_t n,
-                       LinearRay* out) {
+KNNOCC_NOINLINE_SETUP void setup_linear_rays(const Grid<Key>& grid, const RayFan& fan,
+                                             const RayEnd* rays, std::size_t n, LinearRay* out) {
   std::size_t i = 0;
 #if KNNOCC_AVX2_LANES
   if (cpu_has_avx2())

@@ -18,10 +18,12 @@
 //      the scan. Threads take equal shares of the points (when the point container has random
 //      access).
 //   2. walk: every ray marks its voxels in a per-scan scratch: a dense bit per voxel of the box
-//      (detail/scan_bitmap.hpp) walked four rays at a time (detail/ray_lanes.hpp) when the box
-//      is small enough, else a hashed mask per touched brick. Each thread takes chunks of rays
-//      into its own scratch; free and occupied are unions, so the result does not depend on
-//      which thread walked which ray.
+//      (detail/scan_bitmap.hpp) walked eight or four rays at a time (AVX-512 or AVX2,
+//      detail/ray_lanes.hpp) when the box is small enough, else a hashed mask per touched brick.
+//      Each thread takes chunks of rays into its own scratch; free and occupied are unions, so
+//      the result does not depend on which thread walked which ray.
+//      Large scans whose dense box is known in advance run 1 and 2 a chunk of points at a time
+//      into the same scratch (insert_chunked), which bounds the per-point buffers.
 //   3. apply: the touched bricks with the thread scratches OR-ed, gathered in z, y, x brick order
 //      whatever the path or thread count; the missing map bricks created in that order (one
 //      thread), then every touched voxel updated exactly once, occupied first (each brick by one
@@ -89,8 +91,10 @@ struct ScanStats {
   std::size_t occupied_voxels = 0;   ///< voxels that received the hit update (or a rated sum)
   std::size_t free_voxels = 0;       ///< voxels that received the miss update
   bool origin_valid = true;          ///< false: origin NaN/Inf, nothing was inserted
-  /// Pieces the points were collected and walked in: large scans go kChunkPoints (8192) points at
-  /// a time, which bounds the per-point buffers (the map gets the same updates either way).
+  /// Pieces the points were collected and walked in (0: nothing inserted). A scan of more than
+  /// 8192 points in a random-access container (not discretized, not rated) whose dense box fits
+  /// goes 8192 points at a time, which bounds the per-point buffers; the map gets the same
+  /// updates either way.
   std::size_t chunks = 0;
 };
 
@@ -449,9 +453,9 @@ class ScanInserter {
   // The per-point buffers (rays and hits, 32 bytes a point) would outweigh a small map, so a large
   // scan whose dense box is known in advance goes through collect and walk a chunk of points at a
   // time, into the same bitmaps, and is applied once at the end: the same voxels, each updated
-  // once, as in one piece. The box comes from the points' coordinate bounds (keys are monotonic
-  // in coordinates, and a ray truncated at max_range ends between origin and point), grown by a
-  // voxel for rounding.
+  // once, as in one piece. The box comes from the points' coordinate bounds, clipped to max_range
+  // around the origin (keys are monotonic in coordinates; a ray truncated at max_range ends
+  // between origin and point, within max_range of the origin), grown by a voxel for rounding.
   static constexpr std::size_t kChunkPoints = 8192;
 
   template <class Points>
@@ -480,6 +484,14 @@ class ScanInserter {
             std::fabs(p.x - origin_.x) + std::fabs(p.y - origin_.y) + std::fabs(p.z - origin_.z);
         if (max_range > 0) d = std::min(d, 1.7320508075688772 * max_range);  // L1 <= sqrt(3) L2
         sampled += d;
+      }
+    }
+    if (max_range > 0) {  // rays end within max_range of the origin (truncated past it)
+      const float o[3] = {origin_.x, origin_.y, origin_.z};
+      const auto r = detail::to_float(max_range);
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::max(lo[a], o[a] - r);
+        hi[a] = std::min(hi[a], o[a] + r);
       }
     }
     Key klo, khi;

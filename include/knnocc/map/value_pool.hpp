@@ -4,7 +4,8 @@
 // One allocation per brick made a fresh map pay malloc's bookkeeping and a 4 KB page fault per two
 // bricks. The pool hands out arrays in creation order from slabs that grow geometrically (64 KB
 // to 512 KB, then 2 MB each), so small maps stay small and large maps are mapped 2 MB at a time
-// (detail/huge_pages.hpp). Arrays given back (compacted bricks) are reused first. The pool owns
+// (detail/huge_pages.hpp). Arrays given back (bricks the .bt reader fills whole) are reused
+// first; compaction builds a new, exactly sized pool instead (OccupancyMap::compact). The pool owns
 // the memory: arrays stay valid until clear() or the pool's destruction, and a moved pool keeps
 // them at the same addresses.
 
@@ -43,9 +44,10 @@ class ValuePool {
     if (p) free_.push_back(p);
   }
 
-  /// Room for n more arrays in one slab of exactly that size (compaction packs into one).
+  /// On a pool without slabs: the first slab holds exactly n arrays (compaction packs into one).
+  /// Does nothing on a pool that has slabs already.
   void reserve(std::size_t n) {
-    if (n > 0) add_slab(n);
+    if (n > 0 && slabs_.empty()) add_slab(n);
   }
 
   /// Releases every array and slab.
@@ -58,7 +60,7 @@ class ValuePool {
   /// Bytes reserved by the slabs (arrays in use, given back, and not yet handed out).
   std::size_t memory_usage() const {
     std::size_t bytes = free_.capacity() * sizeof(float*) + slabs_.capacity() * sizeof(Slab);
-    for (const Slab& s : slabs_) bytes += s.arrays * kArrayBytes;
+    for (const Slab& s : slabs_) bytes += detail::big_size(s.arrays * kArrayBytes);
     return bytes;
   }
 

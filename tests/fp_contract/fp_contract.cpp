@@ -1,0 +1,56 @@
+// A program of its own built with -ffp-contract=fast (tests/CMakeLists.txt), as a consumer's
+// gnu++17 build with GCC, or clang's default, may contract: the insertion's vector walks (whose
+// AVX-512 target enables FMA) must still produce OctoMap's keys. Its own program, so that no
+// inline function comes from a translation unit built otherwise. The reference is
+// compute_ray_keys, compiled for the baseline target, which has no FMA to contract into.
+#define DOCTEST_CONFIG_IMPLEMENT_WITH_MAIN
+#include <doctest/doctest.h>
+
+#include <optional>
+#include <random>
+#include <set>
+#include <vector>
+
+#include <knnocc/map/scan_inserter.hpp>
+#include <knnocc/raycast/dda.hpp>
+
+#include "../test_support.hpp"
+
+using knnocc::OcKey;
+using knnocc::Point3f;
+
+TEST_CASE("fp_contract.insertion_keeps_octomap_keys") {
+  knnocc::test::Rng rng(53);
+  std::uniform_real_distribution<float> u(-6.f, 6.f);
+  for (const int n : {3000, 20000}) {  // one piece, and chunks
+    CAPTURE(n);
+    std::vector<Point3f> pts;
+    for (int i = 0; i < n; ++i) pts.push_back({u(rng), u(rng), u(rng) * 0.3f});
+    const Point3f origin{0.013f, -0.027f, 0.31f};
+    knnocc::OccupancyMap<OcKey> map(0.05);
+    knnocc::ScanInserter<OcKey> inserter(map);
+    const auto st = inserter.insert_point_cloud(origin, pts);
+
+    std::set<OcKey> free_cells, occupied_cells;
+    std::vector<OcKey> ray;
+    std::size_t keys = 0;
+    for (const Point3f& p : pts) {
+      if (knnocc::compute_ray_keys(map.grid(), origin, p, ray)) {
+        free_cells.insert(ray.begin(), ray.end());
+        keys += ray.size();
+      }
+      OcKey k;
+      if (map.grid().point_to_key(p, k)) occupied_cells.insert(k);
+    }
+    for (const OcKey& k : occupied_cells) free_cells.erase(k);
+    CHECK(st.ray_keys == keys);
+    CHECK(st.occupied_voxels == occupied_cells.size());
+    CHECK(st.free_voxels == free_cells.size());
+    std::size_t wrong = 0;
+    for (const OcKey& k : free_cells) wrong += !(map.is_occupied(k) == std::optional<bool>(false));
+    for (const OcKey& k : occupied_cells)
+      wrong += !(map.is_occupied(k) == std::optional<bool>(true));
+    CHECK(wrong == 0);
+    CHECK(map.num_voxels() == free_cells.size() + occupied_cells.size());
+  }
+}

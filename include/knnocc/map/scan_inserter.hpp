@@ -91,9 +91,9 @@ struct ScanStats {
   std::size_t occupied_voxels = 0;   ///< voxels that received the hit update (or a rated sum)
   std::size_t free_voxels = 0;       ///< voxels that received the miss update
   bool origin_valid = true;          ///< false: origin NaN/Inf, nothing was inserted
-  /// Pieces the points were collected and walked in (0: nothing inserted). A scan of more than
-  /// 8192 points in a random-access container (not discretized, not rated) whose dense box fits
-  /// goes 8192 points at a time, which bounds the per-point buffers; the map gets the same
+  /// Pieces the points were collected and walked in (0: the origin was not finite). A scan of more
+  /// than 8192 points in a random-access container (not discretized, not rated) whose dense box
+  /// fits goes 8192 points at a time, which bounds the per-point buffers; the map gets the same
   /// updates either way.
   std::size_t chunks = 0;
 };

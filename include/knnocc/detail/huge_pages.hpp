@@ -35,6 +35,15 @@ inline constexpr std::size_t kHugeMin = std::size_t{1} << 20;  ///< smallest blo
 /// Number of big_alloc calls so far (the tests check that warmed-up writers make none).
 inline std::atomic<std::size_t> big_allocations{0};
 
+/// What a failed big_alloc leads to: std::bad_alloc, or abort() without exceptions.
+[[noreturn]] inline void out_of_memory() {
+#if KNNOCC_HAS_EXCEPTIONS
+  throw std::bad_alloc();
+#else
+  std::abort();
+#endif
+}
+
 /// Bytes of `bytes` rounded up the way big_alloc maps them (whole huge pages when large).
 inline std::size_t big_size(std::size_t bytes) {
   if (bytes > ~std::size_t{0} - 2 * kHugePage) return bytes;  // big_alloc refuses these
@@ -104,13 +113,7 @@ struct BigAllocator {
   BigAllocator(const BigAllocator<U>&) noexcept {}
   T* allocate(std::size_t n) {
     void* p = big_alloc(n * sizeof(T));
-    if (!p) {
-#if KNNOCC_HAS_EXCEPTIONS
-      throw std::bad_alloc();
-#else
-      std::abort();
-#endif
-    }
+    if (!p) out_of_memory();
     return static_cast<T*>(p);
   }
   void deallocate(T* p, std::size_t n) noexcept { big_free(p, n * sizeof(T)); }

@@ -84,14 +84,6 @@ class ScanBitmap {
 
  private:
   using Bits = std::unique_ptr<std::uint64_t[], BigFree>;
-  [[noreturn]] static void out_of_memory() {
-#if KNNOCC_HAS_EXCEPTIONS
-    throw std::bad_alloc();
-#else
-    std::abort();
-#endif
-  }
-
   Bits bits_;
   std::size_t capacity_ = 0;  // words
   std::int64_t lo_[3] = {0, 0, 0};

@@ -84,18 +84,10 @@ class ValuePool {
   void add_slab(std::size_t arrays) {
     const std::size_t bytes = arrays * kArrayBytes;
     auto* data = static_cast<float*>(detail::big_alloc(bytes));
-    if (!data) out_of_memory();
+    if (!data) detail::out_of_memory();
     slabs_.push_back(Slab{std::unique_ptr<float[], detail::BigFree>(data, detail::BigFree{bytes}),
                           data, arrays});
     used_ = 0;
-  }
-
-  [[noreturn]] static void out_of_memory() {
-#if KNNOCC_HAS_EXCEPTIONS
-    throw std::bad_alloc();
-#else
-    std::abort();
-#endif
   }
 
   std::vector<Slab> slabs_;

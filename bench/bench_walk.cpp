@@ -1,0 +1,141 @@
+// bench_walk: what the insertion's two low-level costs are on this machine.
+//   1. The ray walks into a dense bitmap, per voxel visited: scalar, four AVX2 lanes, eight
+//      AVX-512 lanes (those the CPU has), on rays from one origin to random points of a sphere
+//      shell (lengths 0.5-1 x R at 0.05 m; R = 4.8 m gives ~108 voxels per ray, an L2-sized box).
+//   2. A fresh page: the cost per 4 KB of first touching 64 MB of new anonymous memory, with 4 KB
+//      pages and with MADV_HUGEPAGE (Linux; what detail/huge_pages.hpp relies on).
+//
+// usage: bench_walk [--length R]... [--rays N]
+
+#include <sys/mman.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "bench_common.hpp"
+
+#include <knnocc/detail/ray_lanes.hpp>
+#include <knnocc/detail/scan_bitmap.hpp>
+
+namespace {
+
+using namespace knnocc;
+
+void walks(double length, int n_rays) {
+  const Grid<OcKey> grid(0.05);
+  const Point3f o{0.01f, 0.02f, 0.03f};
+  OcKey ko;
+  grid.point_to_key(o, ko);
+  const std::int32_t okey[3] = {ko[0], ko[1], ko[2]};
+  std::int64_t lo[3], size[3];
+  for (int a = 0; a < 3; ++a) {
+    const auto r = static_cast<std::int64_t>(length / 0.05) + 16;
+    lo[a] = (ko[a] - r) / 8 * 8;
+    size[a] = (2 * r + 64) / 64 * 64;
+  }
+  detail::ScanBitmap bitmap;
+  bitmap.reshape(lo, size);
+  const std::int64_t stride[3] = {1, size[0], size[0] * size[1]};
+  const detail::RayFan fan(grid, o, okey, lo, stride);
+  std::mt19937 rng(1);
+  std::normal_distribution<float> n(0, 1);
+  std::uniform_real_distribution<float> u(0.5f, 1.0f);
+  std::vector<detail::RayEnd> rays;
+  while (static_cast<int>(rays.size()) < n_rays) {
+    const float x = n(rng), y = n(rng), z = n(rng);
+    const float s = static_cast<float>(length) * u(rng) / std::sqrt(x * x + y * y + z * z);
+    detail::RayEnd r;
+    r.end = {o.x + x * s, o.y + y * s, o.z + z * s};
+    OcKey k;
+    if (!grid.point_to_key(r.end, k) || k == ko) continue;
+    for (int a = 0; a < 3; ++a) r.key[a] = k[a];
+    rays.push_back(r);
+  }
+  std::vector<detail::LinearRay> linear(rays.size());
+  detail::setup_linear_rays(grid, fan, rays.data(), rays.size(), linear.data());
+  std::printf("\nrays of %.1f-%.1f m at 0.05 m (%d rays, box %.1f MB):\n", 0.5 * length, length,
+              n_rays, double(size[0]) * size[1] * size[2] / 8e6);
+  for (int variant = 0; variant < 3; ++variant) {
+    const char* name = variant == 0   ? "scalar"
+                       : variant == 1 ? "AVX2, 4 lanes"
+                                      : "AVX-512, 8 lanes";
+#if KNNOCC_AVX2_LANES
+    if ((variant == 1 && !detail::cpu_has_avx2()) || (variant == 2 && !detail::cpu_has_avx512())) {
+      std::printf("  %-17s not supported by this CPU\n", name);
+      continue;
+    }
+#else
+    if (variant > 0) continue;
+#endif
+    double best = 1e30;
+    std::size_t visits = 0;
+    for (int rep = 0; rep < 5; ++rep) {
+      std::size_t i = 0;
+      auto next = [&](detail::LinearRay& r) {
+        if (i == linear.size()) return false;
+        r = linear[i++];
+        return true;
+      };
+      const double t0 = bench::now();
+      if (variant == 0) visits = detail::walk_linear_rays_scalar(next, bitmap.words());
+#if KNNOCC_AVX2_LANES
+      if (variant == 1) visits = detail::walk_linear_rays_avx2(next, bitmap.words());
+      if (variant == 2) visits = detail::walk_linear_rays_avx512(next, bitmap.words());
+#endif
+      best = std::min(best, bench::now() - t0);
+    }
+    std::printf("  %-17s %.3f ns per voxel visited (%.1f visits per ray, best of 5)\n", name,
+                best * 1e9 / static_cast<double>(visits),
+                static_cast<double>(visits) / static_cast<double>(linear.size()));
+  }
+}
+
+void fresh_pages() {
+  std::printf("\nfirst touch of 64 MB of fresh memory (best of 4):\n");
+  for (const bool huge : {false, true}) {
+    double best = 1e30;
+    const std::size_t bytes = std::size_t{64} << 20;
+    for (int rep = 0; rep < 4; ++rep) {
+      void* p = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      if (p == MAP_FAILED) return;
+#if defined(MADV_HUGEPAGE)
+      if (huge) madvise(p, bytes, MADV_HUGEPAGE);
+#endif
+      auto* c = static_cast<volatile char*>(p);
+      const double t0 = bench::now();
+      for (std::size_t i = 0; i < bytes; i += 4096) c[i] = 1;
+      best = std::min(best, bench::now() - t0);
+      munmap(p, bytes);
+    }
+    std::printf("  %-22s %.2f us per 4 KB\n", huge ? "MADV_HUGEPAGE (2 MB)" : "4 KB pages",
+                best * 1e6 / (bytes / 4096));
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<double> lengths;
+  int n_rays = 200000;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--length" && i + 1 < argc)
+      lengths.push_back(std::atof(argv[++i]));
+    else if (a == "--rays" && i + 1 < argc)
+      n_rays = std::max(1, std::atoi(argv[++i]));
+    else {
+      std::fprintf(stderr, "usage: bench_walk [--length R]... [--rays N]\n");
+      return 2;
+    }
+  }
+  if (lengths.empty()) lengths = {4.8, 2.0};
+  std::printf("bench_walk: build type '%s'\n", KNNOCC_BENCH_BUILD_TYPE);
+  for (const double l : lengths) walks(l, n_rays);
+  fresh_pages();
+  return 0;
+}

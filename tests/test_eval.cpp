@@ -245,4 +245,12 @@ TEST_CASE("eval: the shell count agrees with sampling every voxel of the referen
   eval::Reference huge;
   huge.cuboids.push_back({{-1000, -1000, 0}, {1000, 1000, 10}});
   CHECK_THROWS_AS(eval::count_shell(Grid<OcKey>(0.05), huge), std::invalid_argument);
+  // The limit is a parameter: this reference's box (grown by a voxel) is about 21 x 19 x 26 voxels.
+  CHECK_THROWS_AS(eval::count_shell(grid, ref, 5000), std::invalid_argument);
+  CHECK(eval::count_shell(grid, ref, 50000) == exact);
+  eval::MetricOptions small;
+  small.max_shell_box = 5000;
+  const OccupancyMap<OcKey> empty(0.1);
+  CHECK_THROWS_AS(eval::evaluate(empty, ref, small), std::invalid_argument);
+  CHECK(eval::evaluate(empty, ref).shell == exact);
 }

@@ -26,9 +26,17 @@
 
 namespace knnocc::eval {
 
+/// Default for the most voxels count_shell() examines (the reference's bounding box in voxels): a
+/// box larger than this (e.g. a kilometre-sized shape at centimetre voxels) is refused as a
+/// mistake.
+inline constexpr std::uint64_t kMaxShellBox = std::uint64_t{1} << 31;
+
 struct MetricOptions {
   double inflate = 0.3;      ///< reference inflation for irrelevant nodes (m)
   double ground_band = 0.3;  ///< ignored height above the ground for irrelevant nodes (m)
+  /// Largest reference bounding box (in voxels) the shell count walks; its time grows with the
+  /// box, so a harness with a time budget (the fuzzer) sets it lower.
+  std::uint64_t max_shell_box = kMaxShellBox;
 };
 
 struct Metrics {
@@ -54,15 +62,12 @@ inline bool on_shell(const Reference& ref, BoxRelation rel, const Point3d& c) {
   return rel == BoxRelation::boundary && !(ref.has_ground && !(c.z > ref.ground_z));
 }
 
-/// Most voxels count_shell() examines (the reference's bounding box in voxels): a box larger than
-/// this (e.g. a kilometre-sized shape at centimetre voxels) is refused as a mistake.
-inline constexpr std::uint64_t kMaxShellBox = std::uint64_t{1} << 31;
-
 /// Voxels of the grid that lie on the reference's shell. Only voxels inside the key range are
-/// counted (a map cannot hold others); a bounding box of more than kMaxShellBox voxels is
+/// counted (a map cannot hold others); a bounding box of more than `max_box` voxels is
 /// std::invalid_argument.
 template <class Key>
-std::size_t count_shell(const Grid<Key>& grid, const Reference& ref) {
+std::size_t count_shell(const Grid<Key>& grid, const Reference& ref,
+                        std::uint64_t max_box = kMaxShellBox) {
   Point3d lo, hi;
   ref.bounds(grid.resolution(), lo, hi);
   if (!(lo.x <= hi.x)) return 0;
@@ -76,10 +81,10 @@ std::size_t count_shell(const Grid<Key>& grid, const Reference& ref) {
     klo[a] = static_cast<std::int64_t>(std::min(std::max(std::floor(l[a] / r) + c, 0.0), top));
     khi[a] = static_cast<std::int64_t>(std::min(std::max(std::floor(h[a] / r) + c, 0.0), top));
     box *= static_cast<std::uint64_t>(khi[a] - klo[a] + 1);
-    if (box > kMaxShellBox)
-      knnocc::detail::invalid_argument(
-          "the reference's bounding box spans more than 2^31 voxels at " + std::to_string(r) +
-          " m");
+    if (box > max_box)
+      knnocc::detail::invalid_argument("the reference's bounding box spans more than " +
+                                       std::to_string(max_box) + " voxels at " + std::to_string(r) +
+                                       " m");
   }
   std::size_t n = 0;
   for (std::int64_t x = klo[0]; x <= khi[0]; ++x)
@@ -99,7 +104,7 @@ Metrics evaluate(const OccupancyMap<Key>& map, const Reference& ref, MetricOptio
   Metrics m;
   const Grid<Key>& g = map.grid();
   const double r = g.resolution();
-  m.shell = count_shell(g, ref);
+  m.shell = count_shell(g, ref, opt.max_shell_box);
   map.for_each_voxel([&](const Key& k, float v) {
     const Point3d c{g.index_to_coord(k[0]), g.index_to_coord(k[1]), g.index_to_coord(k[2])};
     const BoxRelation rel = voxel_relation(ref, c, r);

@@ -15,6 +15,16 @@
 #define KNNOCC_HAS_EXCEPTIONS 0
 #endif
 
+// Inlining where the hot loops need it to be certain (per-point and per-step helpers) and where
+// it must not happen (rare paths kept out of a loop, code that must keep the caller's flags).
+#if defined(__GNUC__) || defined(__clang__)
+#define KNNOCC_ALWAYS_INLINE __attribute__((always_inline)) inline
+#define KNNOCC_NOINLINE __attribute__((noinline))
+#else
+#define KNNOCC_ALWAYS_INLINE inline
+#define KNNOCC_NOINLINE
+#endif
+
 namespace knnocc::detail {
 
 /// Reports a caller error: std::invalid_argument, or a message and abort() without exceptions.

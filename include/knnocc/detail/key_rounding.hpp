@@ -21,12 +21,12 @@ class KeyRounding {
   explicit KeyRounding(const Grid<Key>& grid) : inv_res_(1.0 / grid.resolution()) {}
 
   /// Grid::point_to_key(p, key) for a float point, the key as three integers.
-  bool point_to_key(const Point3f& p, std::int64_t (&key)[3]) const {
+  KNNOCC_ALWAYS_INLINE bool point_to_key(const Point3f& p, std::int64_t (&key)[3]) const {
     return index(p.x, key[0]) && index(p.y, key[1]) && index(p.z, key[2]);
   }
 
   /// Grid::coord_to_index for one float coordinate.
-  bool index(float c, std::int64_t& out) const {
+  KNNOCC_ALWAYS_INLINE bool index(float c, std::int64_t& out) const {
     const double s = inv_res_ * static_cast<double>(c);
     constexpr auto center = static_cast<double>(Key::center);
     if (!(s >= -center && s < center)) return false;  // NaN fails too

@@ -14,18 +14,13 @@
 // of the rays (setup_walk) goes four at a time as well. Elsewhere (no AVX2, other architectures,
 // or KNNOCC_NO_SIMD defined) everything runs on the scalar code, with the same results.
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <limits>
 
 #include "../raycast/dda.hpp"
-
-#if defined(__GNUC__) || defined(__clang__)
-#define KNNOCC_NOINLINE_SETUP __attribute__((noinline))
-#else
-#define KNNOCC_NOINLINE_SETUP
-#endif
 
 #if !defined(KNNOCC_NO_SIMD) && (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__)
 #define KNNOCC_AVX2_LANES 1
@@ -90,7 +85,7 @@ void setup_linear_ray(const Grid<Key>& grid, const RayFan& fan, const RayEnd& ra
   for (int a = 0; a < 3; ++a) r.stride[a] = step[a] * fan.stride[a];
 }
 
-inline void set_bit(std::uint64_t* bits, std::int64_t i) {
+KNNOCC_ALWAYS_INLINE void set_bit(std::uint64_t* bits, std::int64_t i) {
   bits[i >> 6] |= std::uint64_t{1} << (i & 63);
 }
 
@@ -120,6 +115,40 @@ inline std::size_t finish_linear_ray(const LinearRay& r, std::uint64_t* bits) {
   walk_ray(r.state, cursor);
   return cursor.visits;
 }
+
+/// Steps a walk takes before it can end, counted from its start: none of them needs walk_ray()'s
+/// end tests. A walk stands on its end voxel only after exactly steps_to_end steps (one voxel per
+/// step, each axis monotonic). It ends by its length once every next border lies beyond the
+/// length, which along an axis where the end voxel lies two or more borders ahead would take an
+/// error of a whole voxel in the float direction and length (they err by under 0.2 voxel for the
+/// rays of a dense box, whose edges stay below 2^16 + 64 voxels): so only with every axis at most
+/// one voxel short of the end voxel, i.e. within the last three steps before steps_to_end.
+inline std::int64_t unchecked_steps(const WalkState& s) {
+  return s.steps_to_end > 4 ? s.steps_to_end - 4 : 0;
+}
+
+// What a lane walk keeps per lane outside the vector registers.
+template <int Lanes>
+struct LaneBook {
+  std::int64_t iteration = 0;  // steps taken by every lane
+  std::int64_t due[Lanes];     // value of `iteration` when a lane's step countdown runs out
+  std::int64_t safe[Lanes];    // up to this value of `iteration` a lane cannot end
+  alignas(64) std::int64_t end[Lanes];  // end voxels and lengths, for the steps that may end
+  alignas(64) double length[Lanes];
+
+  KNNOCC_ALWAYS_INLINE void load(int l, const LinearRay& r) {
+    due[l] = iteration + r.state.steps_to_end;
+    safe[l] = iteration + unchecked_steps(r.state);
+    end[l] = r.end_index;
+    length[l] = r.state.length;
+  }
+  /// Steps every lane can take from here without an end test.
+  KNNOCC_ALWAYS_INLINE std::int64_t unchecked() const {
+    std::int64_t s = safe[0];
+    for (int l = 1; l < Lanes; ++l) s = std::min(s, safe[l]);
+    return s - iteration;
+  }
+};
 
 /// The one-ray-at-a-time walk. next(ray) fills the next ray and returns false when none is left.
 template <class Next>
@@ -204,17 +233,17 @@ KNNOCC_TARGET_AVX2 void setup_linear_rays4(const RayFan& fan, const RayEnd* rays
   }
 }
 
-// Four rays, one per 64-bit lane.
+// Four rays, one per 64-bit lane: what every step needs (lengths and end voxels, needed only by
+// the steps that may end a lane, wait in the LaneBook: the step loop then has registers to spare).
 struct RayLanes {
   __m256d t0, t1, t2;  // next border crossing per axis
   __m256d d0, d1, d2;  // between two borders per axis
-  __m256d length;
-  __m256i index, end;  // bit of the current and of the end voxel
+  __m256i index;       // bit of the current voxel
   __m256i s0, s1, s2;  // bit offset of a step per axis
 };
 
 // Puts r into lane l: broadcast and blend, so the other lanes stay in registers.
-KNNOCC_TARGET_AVX2 inline void put_lane(RayLanes& v, int l, const LinearRay& r) {
+KNNOCC_TARGET_AVX2 KNNOCC_ALWAYS_INLINE void put_lane(RayLanes& v, int l, const LinearRay& r) {
   const __m256i mi = _mm256_cmpeq_epi64(_mm256_set1_epi64x(l), _mm256_set_epi64x(3, 2, 1, 0));
   const __m256d m = _mm256_castsi256_pd(mi);
   v.t0 = _mm256_blendv_pd(v.t0, _mm256_set1_pd(r.state.t_max[0]), m);
@@ -223,74 +252,82 @@ KNNOCC_TARGET_AVX2 inline void put_lane(RayLanes& v, int l, const LinearRay& r) 
   v.d0 = _mm256_blendv_pd(v.d0, _mm256_set1_pd(r.state.t_delta[0]), m);
   v.d1 = _mm256_blendv_pd(v.d1, _mm256_set1_pd(r.state.t_delta[1]), m);
   v.d2 = _mm256_blendv_pd(v.d2, _mm256_set1_pd(r.state.t_delta[2]), m);
-  v.length = _mm256_blendv_pd(v.length, _mm256_set1_pd(r.state.length), m);
   v.index = _mm256_blendv_epi8(v.index, _mm256_set1_epi64x(r.index), mi);
-  v.end = _mm256_blendv_epi8(v.end, _mm256_set1_epi64x(r.end_index), mi);
   v.s0 = _mm256_blendv_epi8(v.s0, _mm256_set1_epi64x(r.stride[0]), mi);
   v.s1 = _mm256_blendv_epi8(v.s1, _mm256_set1_epi64x(r.stride[1]), mi);
   v.s2 = _mm256_blendv_epi8(v.s2, _mm256_set1_epi64x(r.stride[2]), mi);
 }
 
 // The ray in lane l, with `steps_to_end` steps left before it can stand on its end voxel.
-KNNOCC_TARGET_AVX2 inline LinearRay get_lane(const RayLanes& v, int l, std::int64_t steps_to_end) {
-  alignas(32) double d[7][4];
-  alignas(32) std::int64_t i[5][4];
-  const __m256d dv[7] = {v.t0, v.t1, v.t2, v.d0, v.d1, v.d2, v.length};
-  const __m256i iv[5] = {v.index, v.end, v.s0, v.s1, v.s2};
-  for (int k = 0; k < 7; ++k) _mm256_store_pd(d[k], dv[k]);
-  for (int k = 0; k < 5; ++k) _mm256_store_si256(reinterpret_cast<__m256i*>(i[k]), iv[k]);
+KNNOCC_TARGET_AVX2 inline LinearRay get_lane(const RayLanes& v, const LaneBook<4>& book, int l,
+                                             std::int64_t steps_to_end) {
+  alignas(32) double d[6][4];
+  alignas(32) std::int64_t i[4][4];
+  const __m256d dv[6] = {v.t0, v.t1, v.t2, v.d0, v.d1, v.d2};
+  const __m256i iv[4] = {v.index, v.s0, v.s1, v.s2};
+  for (int k = 0; k < 6; ++k) _mm256_store_pd(d[k], dv[k]);
+  for (int k = 0; k < 4; ++k) _mm256_store_si256(reinterpret_cast<__m256i*>(i[k]), iv[k]);
   return LinearRay{
-      {{d[0][l], d[1][l], d[2][l]}, {d[3][l], d[4][l], d[5][l]}, d[6][l], steps_to_end},
+      {{d[0][l], d[1][l], d[2][l]}, {d[3][l], d[4][l], d[5][l]}, book.length[l], steps_to_end},
       i[0][l],
-      {i[2][l], i[3][l], i[4][l]},
-      i[1][l]};
+      {i[1][l], i[2][l], i[3][l]},
+      book.end[l]};
 }
 
-// One step of walk_ray on the four lanes of v; returns the lanes that may have ended (bit l).
-KNNOCC_TARGET_AVX2 inline int step_lanes(RayLanes& v, __m256d& tmin) {
-  // walk_ray's step: x if t0 < t1 && t0 < t2, else y if t1 < t2 (and not x), else z.
+// The axis each lane steps along next, walk_ray()'s choice in branch-free form: x if t0 < t1 and
+// t0 < t2, else y if t1 < t2, else z. Advances t_max and the bit index of every lane.
+KNNOCC_TARGET_AVX2 KNNOCC_ALWAYS_INLINE void advance_lanes(RayLanes& v) {
   const __m256d lt01 = _mm256_cmp_pd(v.t0, v.t1, _CMP_LT_OQ);
   const __m256d lt02 = _mm256_cmp_pd(v.t0, v.t2, _CMP_LT_OQ);
   const __m256d lt12 = _mm256_cmp_pd(v.t1, v.t2, _CMP_LT_OQ);
   const __m256d x = _mm256_and_pd(lt01, lt02);
   const __m256d y = _mm256_andnot_pd(lt01, lt12);
   const __m256d z = _mm256_or_pd(lt02, lt12);  // inverted: z steps where this is 0
+  // (Adding to every lane and blending was measured too: 3% slower here.)
   v.t0 = _mm256_add_pd(v.t0, _mm256_and_pd(x, v.d0));
   v.t1 = _mm256_add_pd(v.t1, _mm256_and_pd(y, v.d1));
   v.t2 = _mm256_add_pd(v.t2, _mm256_andnot_pd(z, v.d2));
   const __m256i stride = _mm256_blendv_epi8(_mm256_blendv_epi8(v.s2, v.s1, _mm256_castpd_si256(y)),
                                             v.s0, _mm256_castpd_si256(x));
   v.index = _mm256_add_epi64(v.index, stride);
+}
+
+// One step on the four lanes of v; returns the lanes that may have ended (bit l).
+KNNOCC_TARGET_AVX2 KNNOCC_ALWAYS_INLINE int step_lanes(RayLanes& v, const LaneBook<4>& book,
+                                                       __m256d& tmin) {
+  advance_lanes(v);
   // A lane ends on its end voxel (the bit index is one-to-one, so one comparison does what
   // walk_ray's countdown does) or once every next border lies beyond its length;
   // std::min(std::min(t0, t1), t2), operand order included (vminpd(b, a) = b < a ? b : a).
   tmin = _mm256_min_pd(v.t2, _mm256_min_pd(v.t1, v.t0));
-  const __m256d may_end = _mm256_or_pd(_mm256_cmp_pd(tmin, v.length, _CMP_GT_OQ),
-                                       _mm256_castsi256_pd(_mm256_cmpeq_epi64(v.index, v.end)));
+  const __m256d length = _mm256_load_pd(book.length);
+  const __m256i end = _mm256_load_si256(reinterpret_cast<const __m256i*>(book.end));
+  const __m256d may_end = _mm256_or_pd(_mm256_cmp_pd(tmin, length, _CMP_GT_OQ),
+                                       _mm256_castsi256_pd(_mm256_cmpeq_epi64(v.index, end)));
   return _mm256_movemask_pd(may_end);
 }
 
-KNNOCC_TARGET_AVX2 inline void mark_lanes(const RayLanes& v, std::uint64_t* bits) {
-  const __m128i lo = _mm256_castsi256_si128(v.index), hi = _mm256_extracti128_si256(v.index, 1);
-  set_bit(bits, _mm_cvtsi128_si64(lo));
-  set_bit(bits, _mm_extract_epi64(lo, 1));
-  set_bit(bits, _mm_cvtsi128_si64(hi));
-  set_bit(bits, _mm_extract_epi64(hi, 1));
+// One store of the four indices, then scalar shifts (as in the eight-lane walk): the indices go
+// through memory, not through one transfer each from the vector unit (0.94-0.95 of the time in two
+// of three interleaved runs of TUM's rays on an AMD EPYC with AVX2, 1.03 in the third).
+KNNOCC_TARGET_AVX2 KNNOCC_ALWAYS_INLINE void mark_lanes(const RayLanes& v, std::uint64_t* bits) {
+  alignas(32) std::int64_t index[4];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(index), v.index);
+  for (int l = 0; l < 4; ++l) set_bit(bits, index[l]);
 }
 
 /// Four rays at once (see the top of this file). AVX2 (and BMI2 shifts), never FMA: the
-/// arithmetic is walk_ray()'s, operation for operation. (Eight rays in two groups of four were
-/// measured too: slower, the loop is bound by its floating-point throughput, not its latency.)
+/// arithmetic is walk_ray()'s, operation for operation. Most steps need no end test at all (see
+/// unchecked_steps); the steps that might end a lane are taken one at a time with the test.
+/// (Eight rays in two groups of four were measured too: slower, the loop is bound by its
+/// floating-point throughput, not its latency.)
 template <class Next>
 KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* bits) {
   constexpr int kLanes = 4;
   RayLanes v;
-  v.t0 = v.t1 = v.t2 = v.d0 = v.d1 = v.d2 = v.length = _mm256_setzero_pd();
-  v.index = v.end = v.s0 = v.s1 = v.s2 = _mm256_setzero_si256();
-  std::int64_t iteration = 0;  // steps taken by every lane
-  std::int64_t due[kLanes];    // value of `iteration` when a lane's step countdown runs out
-  std::int64_t end[kLanes];    // scalar copies for the rare path
-  double length[kLanes];
+  v.t0 = v.t1 = v.t2 = v.d0 = v.d1 = v.d2 = _mm256_setzero_pd();
+  v.index = v.s0 = v.s1 = v.s2 = _mm256_setzero_si256();
+  LaneBook<kLanes> book;
   std::size_t visits = 0;
   LinearRay r;
   int loaded = 0;
@@ -298,52 +335,57 @@ KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* 
     set_bit(bits, r.index);  // the origin voxel
     ++visits;
     put_lane(v, loaded, r);
-    due[loaded] = r.state.steps_to_end;
-    end[loaded] = r.end_index;
-    length[loaded] = r.state.length;
+    book.load(loaded, r);
   }
   if (loaded < kLanes) {  // too few rays: the scalar walk
-    for (int l = 0; l < loaded; ++l) visits += finish_linear_ray(get_lane(v, l, due[l]), bits);
+    for (int l = 0; l < loaded; ++l)
+      visits += finish_linear_ray(get_lane(v, book, l, book.due[l]), bits);
     return visits;
   }
 
   for (;;) {
-    __m256d tmin;
-    int ended;
-    while (!(ended = step_lanes(v, tmin))) {
-      ++iteration;
+    // No lane can end in the next n steps: no end test.
+    const std::int64_t n = book.unchecked();
+    for (std::int64_t i = 0; i < n; ++i) {
+      advance_lanes(v);
       mark_lanes(v, bits);
-      visits += kLanes;
     }
-    ++iteration;
+    if (n > 0) {
+      book.iteration += n;
+      visits += static_cast<std::size_t>(n) * kLanes;
+    }
 
-    // Rare path: the lanes that ended take the next rays of the stream; a refilled lane stands
-    // on its new ray's origin voxel, so the marking below covers it like the others.
-    alignas(32) double tm[kLanes];
-    alignas(32) std::int64_t idx[kLanes];
-    _mm256_store_pd(tm, tmin);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(idx), v.index);
-    unsigned done = 0;
-    for (unsigned m = static_cast<unsigned>(ended); m; m &= m - 1) {
-      const int l = __builtin_ctz(m);
-      if (idx[l] == end[l] || tm[l] > length[l]) done |= 1u << l;
-    }
-    for (unsigned m = done; m; m &= m - 1) {
-      const int l = __builtin_ctz(m);
-      if (next(r)) {
-        put_lane(v, l, r);
-        due[l] = iteration + r.state.steps_to_end;
-        end[l] = r.end_index;
-        length[l] = r.state.length;
-        done &= ~(1u << l);
-      } else {  // the stream ran dry: the rays still walking finish one at a time
-        for (unsigned live = ~done & 0xfu; live; live &= live - 1) {
-          const int j = __builtin_ctz(live);
-          const LinearRay rj = get_lane(v, j, due[j] - iteration);
-          set_bit(bits, rj.index);
-          visits += 1 + finish_linear_ray(rj, bits);
+    // A lane may end: one step with the end test.
+    __m256d tmin;
+    const int ended = step_lanes(v, book, tmin);
+    ++book.iteration;
+    if (ended) {
+      // The lanes that ended take the next rays of the stream; a refilled lane stands on its new
+      // ray's origin voxel, so the marking below covers it like the others.
+      alignas(32) double tm[kLanes];
+      alignas(32) std::int64_t idx[kLanes];
+      _mm256_store_pd(tm, tmin);
+      _mm256_store_si256(reinterpret_cast<__m256i*>(idx), v.index);
+      unsigned done = 0;
+      for (unsigned m = static_cast<unsigned>(ended); m; m &= m - 1) {
+        const int l = __builtin_ctz(m);
+        if (idx[l] == book.end[l] || tm[l] > book.length[l]) done |= 1u << l;
+      }
+      for (unsigned m = done; m; m &= m - 1) {
+        const int l = __builtin_ctz(m);
+        if (next(r)) {
+          put_lane(v, l, r);
+          book.load(l, r);
+          done &= ~(1u << l);
+        } else {  // the stream ran dry: the rays still walking finish one at a time
+          for (unsigned live = ~done & 0xfu; live; live &= live - 1) {
+            const int j = __builtin_ctz(live);
+            const LinearRay rj = get_lane(v, book, j, book.due[j] - book.iteration);
+            set_bit(bits, rj.index);
+            visits += 1 + finish_linear_ray(rj, bits);
+          }
+          return visits;
         }
-        return visits;
       }
     }
     mark_lanes(v, bits);
@@ -388,7 +430,7 @@ struct RayLanes8 {
   __m512i s0, s1, s2;  // bit offset of a step per axis
 };
 
-KNNOCC_TARGET_AVX512 inline void put_lane8(RayLanes8& v, int l, const LinearRay& r) {
+KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void put_lane8(RayLanes8& v, int l, const LinearRay& r) {
   const auto m = static_cast<__mmask8>(1u << l);
   v.t0 = _mm512_mask_mov_pd(v.t0, m, _mm512_set1_pd(r.state.t_max[0]));
   v.t1 = _mm512_mask_mov_pd(v.t1, m, _mm512_set1_pd(r.state.t_max[1]));
@@ -420,7 +462,7 @@ KNNOCC_TARGET_AVX512 inline LinearRay get_lane8(const RayLanes8& v, int l,
 }
 
 // step_lanes() on eight lanes; returns the lanes that may have ended.
-KNNOCC_TARGET_AVX512 inline unsigned step_lanes8(RayLanes8& v, __m512d& tmin) {
+KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE unsigned step_lanes8(RayLanes8& v, __m512d& tmin) {
   const __mmask8 lt01 = _mm512_cmp_pd_mask(v.t0, v.t1, _CMP_LT_OQ);
   const __mmask8 lt02 = _mm512_cmp_pd_mask(v.t0, v.t2, _CMP_LT_OQ);
   const __mmask8 lt12 = _mm512_cmp_pd_mask(v.t1, v.t2, _CMP_LT_OQ);
@@ -441,7 +483,8 @@ KNNOCC_TARGET_AVX512 inline unsigned step_lanes8(RayLanes8& v, __m512d& tmin) {
 // faster on an Intel Xeon than storing words and bits computed in the vector unit (1.23 against
 // 1.56 ns per visit, bench_walk, 108-voxel rays), which spent two stores and three vector
 // operations per step.
-KNNOCC_TARGET_AVX512 inline void mark_lanes8(const RayLanes8& v, std::uint64_t* bits) {
+KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void mark_lanes8(const RayLanes8& v,
+                                                           std::uint64_t* bits) {
   alignas(64) std::int64_t index[8];
   _mm512_store_si512(index, v.index);
   for (int l = 0; l < 8; ++l) set_bit(bits, index[l]);
@@ -543,8 +586,8 @@ std::size_t walk_linear_rays(Next& next, std::uint64_t* bits) {
 /// contracting OctoMap's float arithmetic there (-ffp-contract=fast, GCC's default for gnu++17,
 /// or clang's default "on") would change bits; compiled on its own it keeps the caller's flags.
 template <class Key>
-KNNOCC_NOINLINE_SETUP void setup_linear_rays(const Grid<Key>& grid, const RayFan& fan,
-                                             const RayEnd* rays, std::size_t n, LinearRay* out) {
+KNNOCC_NOINLINE void setup_linear_rays(const Grid<Key>& grid, const RayFan& fan, const RayEnd* rays,
+                                       std::size_t n, LinearRay* out) {
   std::size_t i = 0;
 #if KNNOCC_AVX2_LANES
   if (cpu_has_avx2())

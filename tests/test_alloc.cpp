@@ -52,8 +52,9 @@ KNNOCC_TEST_NOINLINE void operator delete(void* p, std::size_t) noexcept { std::
 TEST_CASE("insert.no_allocation_once_warmed_up") {
   knnocc::test::Rng rng(17);
   std::uniform_real_distribution<float> u(-5.f, 5.f);
-  // 20,000 points go in chunks, 6,000 in one piece (and discretize always in one piece).
-  for (const std::size_t n : {std::size_t{20000}, std::size_t{6000}}) {
+  // 20,000 points go in chunks, 3,000 in one piece (and discretize always in one piece).
+  constexpr std::size_t kChunk = knnocc::ScanInserter<knnocc::OcKey>::chunk_points;
+  for (const std::size_t n : {std::size_t{20000}, std::size_t{3000}}) {
     std::vector<knnocc::Point3f> scan(n);
     for (auto& p : scan) p = {u(rng), u(rng), u(rng) * 0.3f};
 
@@ -72,7 +73,7 @@ TEST_CASE("insert.no_allocation_once_warmed_up") {
       const std::size_t allocations = all_allocations() - before;
       CAPTURE(discretize);
       CAPTURE(n);
-      CHECK(st.chunks == (n > 8192 && !discretize ? 3u : 1u));
+      CHECK(st.chunks == (n > kChunk && !discretize ? (n + kChunk - 1) / kChunk : 1u));
       CHECK(st.ray_keys > 30000);
       CHECK(allocations == 0);
     }

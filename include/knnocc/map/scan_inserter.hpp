@@ -53,6 +53,7 @@
 #include "../core/config.hpp"
 #include "../core/point3.hpp"
 #include "../core/point_traits.hpp"
+#include "../detail/append_buffer.hpp"
 #include "../detail/flat_index.hpp"
 #include "../detail/huge_pages.hpp"
 #include "../detail/key_rounding.hpp"
@@ -63,14 +64,6 @@
 #include "../sensor/endpoint_rating.hpp"
 #include "../sensor/octomap_model.hpp"
 #include "occupancy_map.hpp"
-
-// The per-point helpers of collect() must inline into its loop (vector ends and the box stay in
-// registers); GCC would otherwise call them.
-#if defined(__GNUC__) || defined(__clang__)
-#define KNNOCC_ALWAYS_INLINE __attribute__((always_inline)) inline
-#else
-#define KNNOCC_ALWAYS_INLINE inline
-#endif
 
 namespace knnocc {
 
@@ -92,8 +85,8 @@ struct ScanStats {
   std::size_t free_voxels = 0;       ///< voxels that received the miss update
   bool origin_valid = true;          ///< false: origin NaN/Inf, nothing was inserted
   /// Pieces the points were collected and walked in (0: the origin was not finite). A scan of more
-  /// than 8192 points in a random-access container (not discretized, not rated) whose dense box
-  /// fits goes 8192 points at a time, which bounds the per-point buffers; the map gets the same
+  /// than 4096 points in a random-access container (not discretized, not rated) whose dense box
+  /// fits goes 4096 points at a time, which bounds the per-point buffers; the map gets the same
   /// updates either way.
   std::size_t chunks = 0;
 };
@@ -102,6 +95,8 @@ template <class Key = OcKey, class Model = OctoMapModel>
 class ScanInserter {
  public:
   using map_type = OccupancyMap<Key>;
+  /// Points per chunk of a large scan (see ScanStats::chunks).
+  static constexpr std::size_t chunk_points = 4096;
 
   /// threads: how many threads walk the rays of a scan (>= 1; the calling thread is one of them).
   /// The map is the same for every thread count.
@@ -203,12 +198,12 @@ class ScanInserter {
   };
   // What one thread collected from its share of the points.
   struct Part {
-    detail::BigVector<Ray> rays;            // the rays that visit at least one voxel
-    detail::BigVector<std::uint64_t> hits;  // occupied endpoint keys, packed
-    std::vector<float> hit_logodds;         // insert_rated: the log-odds of each hit
-    std::int64_t key_min[3], key_max[3];    // key box of origin, ray ends and hits
-    std::size_t steps = 0;                  // sum of |end - origin|_1 over the rays
-    ScanStats st;                           // points, nonfinite, out_of_range, beyond_max_range
+    detail::AppendBuffer<Ray> rays;            // the rays that visit at least one voxel
+    detail::AppendBuffer<std::uint64_t> hits;  // occupied endpoint keys, packed
+    std::vector<float> hit_logodds;            // insert_rated: the log-odds of each hit
+    std::int64_t key_min[3], key_max[3];       // key box of origin, ray ends and hits
+    std::size_t steps = 0;                     // sum of |end - origin|_1 over the rays
+    ScanStats st;                              // points, nonfinite, out_of_range, beyond_max_range
 
     void clear() {
       rays.clear();
@@ -221,8 +216,8 @@ class ScanInserter {
 
   // One thread's scratch (separate allocations, so threads do not share cache lines).
   struct Worker {
-    detail::ScanBitmap miss;  // dense path
-    detail::FlatIndex index;  // hashed path: brick coordinate -> slot in scratch
+    detail::ScanBitmap hit, miss;  // dense path: this thread's endpoints and free voxels
+    detail::FlatIndex index;       // hashed path: brick coordinate -> slot in scratch
     std::vector<Scratch> scratch;
     std::size_t used = 0;
     std::uint64_t last_coord = 0;
@@ -269,70 +264,110 @@ class ScanInserter {
     const detail::KeyRounding<Key> rounding;
     Part& part;
 
+    // What a loop over points counts, in registers while it runs (the Part's fields are stored
+    // to after every point otherwise: the compiler cannot tell them from the buffers' contents).
+    struct Tally {
+      std::int64_t lo[3], hi[3];  // key box
+      std::size_t steps = 0, points = 0, nonfinite = 0, out_of_range = 0, beyond_max_range = 0;
+      std::uint64_t* hit = nullptr;  // the next hit and ray go here (room made by the caller)
+      Ray* ray = nullptr;
+    };
+    Tally start() const {
+      Tally t;
+      for (int a = 0; a < 3; ++a) {
+        t.lo[a] = part.key_min[a];
+        t.hi[a] = part.key_max[a];
+      }
+      return t;
+    }
+    void finish(const Tally& t) {
+      part.hits.set_end(t.hit);
+      part.rays.set_end(t.ray);
+      for (int a = 0; a < 3; ++a) {
+        part.key_min[a] = t.lo[a];
+        part.key_max[a] = t.hi[a];
+      }
+      part.steps += t.steps;
+      part.st.points += t.points;
+      part.st.nonfinite += t.nonfinite;
+      part.st.out_of_range += t.out_of_range;
+      part.st.beyond_max_range += t.beyond_max_range;
+    }
+
     // rating: null, or the rating of *first (one per point from there on).
     template <class It>
     void add_points(It first, It last, const EndpointRating* rating) {
+      if (rating)
+        add_points<true>(first, last, rating);
+      else
+        add_points<false>(first, last, nullptr);
+    }
+    template <bool Rated, class It>
+    void add_points(It first, It last, const EndpointRating* rating) {
+      // At most one hit and one ray per point: room for them first, then plain stores.
+      const auto n = static_cast<std::size_t>(std::distance(first, last));
+      Tally t = start();
+      t.hit = part.hits.room_for(n);
+      t.ray = part.rays.room_for(n);
       for (; first != last; ++first) {
-        ++part.st.points;
+        ++t.points;
         const Point3f q = to_point3f(*first);
-        const EndpointRating* r = rating ? rating++ : nullptr;
+        const EndpointRating* r = Rated ? rating++ : nullptr;
         if (!detail::finite(q)) {
-          ++part.st.nonfinite;
+          ++t.nonfinite;
           continue;
         }
-        if (r)
-          add<true>(q, r);
-        else
-          add<false>(q, nullptr);
+        add<Rated>(q, r, t);
       }
+      finish(t);
     }
 
-    template <bool Rated = false>
-    KNNOCC_ALWAYS_INLINE void add(const Point3f& p, const EndpointRating* r = nullptr) {
+    template <bool Rated>
+    KNNOCC_ALWAYS_INLINE void add(const Point3f& p, const EndpointRating* r, Tally& t) {
       const Point3f& o = origin;
       std::int64_t k[3];
       if (max_range < 0.0 || detail::octomap_norm(p.x - o.x, p.y - o.y, p.z - o.z) <= max_range) {
         if (!rounding.point_to_key(p, k)) {
-          ++part.st.out_of_range;  // OctoMap's ray check fails on the same endpoint
+          ++t.out_of_range;  // OctoMap's ray check fails on the same endpoint
           return;
         }
-        part.hits.push_back(pack(k));  // even when the origin is out of range, as OctoMap
-        extend_box(k);
+        *t.hit++ = pack(k);  // even when the origin is out of range, as OctoMap
+        extend_box(k, t);
         if constexpr (Rated) {
           part.hit_logodds.push_back(r->logodds);
           if (!r->casts_ray) return;
         }
-        add_ray<false>(p, k);  // the box holds k already
+        add_ray<false>(p, k, t);  // the box holds k already
       } else {
-        ++part.st.beyond_max_range;
+        ++t.beyond_max_range;
         if constexpr (Rated)
           if (!r->casts_ray) return;
         const Point3f e = truncate_ray(o, p, max_range);
-        if (rounding.point_to_key(e, k)) add_ray<true>(e, k);
+        if (rounding.point_to_key(e, k)) add_ray<true>(e, k, t);
       }
     }
 
     // Keeps the rays that visit at least one voxel (start_ray() == RayStart::walk).
     template <bool ExtendBox>
-    KNNOCC_ALWAYS_INLINE void add_ray(const Point3f& end, const std::int64_t (&k)[3]) {
+    KNNOCC_ALWAYS_INLINE void add_ray(const Point3f& end, const std::int64_t (&k)[3], Tally& t) {
       if (!origin_in_range ||
           (k[0] == origin_key[0] && k[1] == origin_key[1] && k[2] == origin_key[2]))
         return;
       // Filled in place: a Ray built on the stack and copied made the CPU reload it through
       // narrower stores.
-      Ray& ray = part.rays.emplace_back();
+      Ray& ray = *t.ray++;
       ray.end = end;
       for (int a = 0; a < 3; ++a) ray.key[a] = static_cast<std::int32_t>(k[a]);
-      if (ExtendBox) extend_box(k);
-      part.steps += static_cast<std::size_t>(std::llabs(k[0] - origin_key[0]) +
-                                             std::llabs(k[1] - origin_key[1]) +
-                                             std::llabs(k[2] - origin_key[2]));
+      if (ExtendBox) extend_box(k, t);
+      t.steps += static_cast<std::size_t>(std::llabs(k[0] - origin_key[0]) +
+                                          std::llabs(k[1] - origin_key[1]) +
+                                          std::llabs(k[2] - origin_key[2]));
     }
 
-    KNNOCC_ALWAYS_INLINE void extend_box(const std::int64_t (&k)[3]) {
+    static KNNOCC_ALWAYS_INLINE void extend_box(const std::int64_t (&k)[3], Tally& t) {
       for (int a = 0; a < 3; ++a) {
-        part.key_min[a] = std::min(part.key_min[a], k[a]);
-        part.key_max[a] = std::max(part.key_max[a], k[a]);
+        t.lo[a] = std::min(t.lo[a], k[a]);
+        t.hi[a] = std::max(t.hi[a], k[a]);
       }
     }
   };
@@ -340,13 +375,6 @@ class ScanInserter {
   static std::uint64_t pack(const std::int64_t (&k)[3]) {  // Key::pack()
     return (static_cast<std::uint64_t>(k[0]) << (2 * Key::depth)) |
            (static_cast<std::uint64_t>(k[1]) << Key::depth) | static_cast<std::uint64_t>(k[2]);
-  }
-
-  // Room for n elements; grown with an eighth to spare, so that scans of slowly growing size do
-  // not each take a fresh block (fresh pages cost a fault each).
-  template <class Vector>
-  static void reserve(Vector& v, std::size_t n) {
-    if (v.capacity() < n) v.reserve(n + n / 8);
   }
 
   template <class Points>
@@ -410,8 +438,8 @@ class ScanInserter {
       if (w >= parts) return;
       Part& part = workers_[w]->part;
       const std::size_t a = n * w / parts, b = n * (w + 1) / parts;
-      reserve(part.rays, b - a);  // one allocation, not a doubling series
-      reserve(part.hits, b - a);
+      part.rays.reserve(b - a);  // one allocation, not a doubling series
+      part.hits.reserve(b - a);
       collector(w, max_range)
           .add_points(first + static_cast<std::ptrdiff_t>(a),
                       first + static_cast<std::ptrdiff_t>(b), ratings ? ratings + a : nullptr);
@@ -456,13 +484,14 @@ class ScanInserter {
   // once, as in one piece. The box comes from the points' coordinate bounds, clipped to max_range
   // around the origin (keys are monotonic in coordinates; a ray truncated at max_range ends
   // between origin and point, within max_range of the origin), grown by a voxel for rounding.
-  static constexpr std::size_t kChunkPoints = 8192;
+  // Each thread takes chunks in turn and collects and walks them into its own bitmaps, all in one
+  // run of the threads: small chunks keep the threads' shares even at the end of a scan.
 
   template <class Points>
   bool insert_chunked(const Points& points, double max_range, ScanStats& st) {
     const auto first = std::begin(points);
     const auto n = static_cast<std::size_t>(std::distance(first, std::end(points)));
-    if (n <= kChunkPoints) return false;
+    if (n <= chunk_points) return false;
     start_collect();
     if (!origin_in_range_) return false;
     float lo[3] = {origin_.x, origin_.y, origin_.z}, hi[3] = {origin_.x, origin_.y, origin_.z};
@@ -506,14 +535,39 @@ class ScanInserter {
     if (!dense_fits()) return false;
 
     prepare_dense();
-    for (std::size_t done = 0; done < n; done += kChunkPoints) {
-      if (done > 0) clear_parts();
-      collect_range(first + static_cast<std::ptrdiff_t>(done), std::min(kChunkPoints, n - done),
-                    max_range, nullptr);
-      merge_parts(st, false);
-      mark_dense(st);
-      ++st.chunks;
+    const detail::RayFan fan = dense_fan();
+    const std::size_t chunks = (n + chunk_points - 1) / chunk_points;
+    for (unsigned w = 0; w < threads_; ++w) {  // here: a thread may get no chunk of this scan
+      workers_[w]->part.rays.reserve(chunk_points);
+      workers_[w]->part.hits.reserve(chunk_points);
     }
+    next_chunk_->store(0, std::memory_order_relaxed);
+    auto job = [&](unsigned w) {
+      Worker& worker = *workers_[w];
+      Part& part = worker.part;
+      worker.visits = 0;
+      for (std::size_t c; (c = next_chunk_->fetch_add(1, std::memory_order_relaxed)) < chunks;) {
+        const std::size_t a = c * chunk_points, b = std::min(n, a + chunk_points);
+        part.rays.clear();
+        part.hits.clear();
+        collector(w, max_range)
+            .add_points(first + static_cast<std::ptrdiff_t>(a),
+                        first + static_cast<std::ptrdiff_t>(b), nullptr);
+        mark_hits(worker);
+        const Ray* rays = part.rays.data();
+        std::size_t left = part.rays.size();
+        worker.visits += walk_dense_rays(worker, fan, [&](const Ray*& pos, const Ray*& stop) {
+          pos = rays;
+          stop = rays + left;
+          left = 0;
+          return pos != stop;
+        });
+      }
+    };
+    run(job);
+    merge_parts(st, false);  // each Part counted the points of all its chunks
+    for (unsigned w = 0; w < threads_; ++w) st.ray_keys += workers_[w]->visits;
+    st.chunks = chunks;
     apply_dense(st);
     return true;
   }
@@ -523,25 +577,30 @@ class ScanInserter {
   void collect_discretized(const Points& points, Collector c) {
     const Grid<Key>& grid = map_->grid();
     endpoints_.clear();
+    auto t = c.start();
     for (const auto& p : points) {
-      ++c.part.st.points;
+      ++t.points;
       const Point3f q = to_point3f(p);
       std::int64_t k[3];
       if (!detail::finite(q))
-        ++c.part.st.nonfinite;
+        ++t.nonfinite;
       else if (!c.rounding.point_to_key(q, k))
-        ++c.part.st.out_of_range;
+        ++t.out_of_range;
       else
         endpoints_.push_back(pack(k));
     }
     std::sort(endpoints_.begin(), endpoints_.end());
     endpoints_.erase(std::unique(endpoints_.begin(), endpoints_.end()), endpoints_.end());
+    t.hit = c.part.hits.room_for(endpoints_.size());
+    t.ray = c.part.rays.room_for(endpoints_.size());
     for (const std::uint64_t packed : endpoints_) {
       const Key k = Key::unpack(packed);
-      c.add(Point3f{static_cast<float>(grid.index_to_coord(k[0])),
-                    static_cast<float>(grid.index_to_coord(k[1])),
-                    static_cast<float>(grid.index_to_coord(k[2]))});
+      c.template add<false>(Point3f{static_cast<float>(grid.index_to_coord(k[0])),
+                                    static_cast<float>(grid.index_to_coord(k[1])),
+                                    static_cast<float>(grid.index_to_coord(k[2]))},
+                            nullptr, t);
     }
+    c.finish(t);
   }
 
   // ---- 2. walk --------------------------------------------------------------------------
@@ -577,8 +636,8 @@ class ScanInserter {
       if (box_size_[a] > kDenseMaxEdge) return false;
       bits *= box_size_[a];
     }
-    // One bitmap per thread for the free voxels, one for the occupied.
-    const double bytes = static_cast<double>(bits) / 8 * (threads_ + 1);
+    // Two bitmaps per thread: free and occupied voxels.
+    const double bytes = static_cast<double>(bits) / 8 * (2 * threads_);
     return bytes <= static_cast<double>(scratch_limit_) &&
            bits <= kDenseBitsPerStep * static_cast<std::int64_t>(steps_) + (std::int64_t{1} << 20);
   }
@@ -591,44 +650,61 @@ class ScanInserter {
 
   // The bitmaps of the dense box (box_lo_, box_size_), all zero.
   void prepare_dense() {
-    hit_bits_.reshape(box_lo_, box_size_);
-    for (unsigned w = 0; w < threads_; ++w) workers_[w]->miss.reshape(box_lo_, box_size_);
+    for (unsigned w = 0; w < threads_; ++w) {
+      workers_[w]->hit.reshape(box_lo_, box_size_);
+      workers_[w]->miss.reshape(box_lo_, box_size_);
+    }
+  }
+  detail::RayFan dense_fan() const {
+    return detail::RayFan(map_->grid(), origin_, origin_key_, box_lo_,
+                          {1, box_size_[0], box_size_[0] * box_size_[1]});
   }
 
-  // The Parts' hits and rays into the bitmaps.
+  // The Parts' hits and rays into the bitmaps: each thread its own Part's hits, and rays from
+  // every Part in chunks.
   void mark_dense(ScanStats& st) {
-    for (unsigned w = 0; w < threads_; ++w)
-      for (const std::uint64_t packed : workers_[w]->part.hits) {
-        const Key k = Key::unpack(packed);
-        detail::set_bit(hit_bits_.words(), hit_bits_.index(k[0], k[1], k[2]));
-      }
-    if (rays_total_ == 0) return;
     plan_chunks();
-    const detail::RayFan fan(map_->grid(), origin_, origin_key_, box_lo_,
-                             {1, box_size_[0], box_size_[0] * box_size_[1]});
+    const detail::RayFan fan = dense_fan();
     auto job = [&](unsigned w) {
       Worker& worker = *workers_[w];
-      // Rays are set up a batch at a time: independent set-ups (divisions, a square root)
-      // overlap in the CPU, and go four at a time on AVX2 machines.
-      constexpr std::size_t kBatch = 16;
-      detail::LinearRay batch[kBatch];
-      std::size_t have = 0, taken = 0;
-      const Ray *pos = nullptr, *stop = nullptr;
-      auto next = [&](detail::LinearRay& r) {
-        if (taken == have) {
-          if (pos == stop && !next_rays(pos, stop)) return false;
-          have = std::min(kBatch, static_cast<std::size_t>(stop - pos));
-          detail::setup_linear_rays(map_->grid(), fan, pos, have, batch);
-          pos += have;
-          taken = 0;
-        }
-        r = batch[taken++];
-        return true;
-      };
-      worker.visits = detail::walk_linear_rays(next, worker.miss.words());
+      mark_hits(worker);
+      worker.visits = walk_dense_rays(
+          worker, fan, [this](const Ray*& pos, const Ray*& stop) { return next_rays(pos, stop); });
     };
     run(job);
     for (unsigned w = 0; w < threads_; ++w) st.ray_keys += workers_[w]->visits;
+  }
+
+  // The worker's Part's endpoints into its hit bitmap.
+  static void mark_hits(Worker& worker) {
+    for (const std::uint64_t packed : worker.part.hits) {
+      const Key k = Key::unpack(packed);
+      detail::set_bit(worker.hit.words(), worker.hit.index(k[0], k[1], k[2]));
+    }
+  }
+
+  // Walks the rays that more(pos, stop) hands out (a range at a time, false when there are no
+  // more) into the worker's miss bitmap; returns the voxels visited. Rays are set up a batch at
+  // a time: independent set-ups (divisions, a square root) overlap in the CPU, and go four at a
+  // time on AVX2 machines.
+  template <class More>
+  std::size_t walk_dense_rays(Worker& worker, const detail::RayFan& fan, More&& more) {
+    constexpr std::size_t kBatch = 16;
+    detail::LinearRay batch[kBatch];
+    std::size_t have = 0, taken = 0;
+    const Ray *pos = nullptr, *stop = nullptr;
+    auto next = [&](detail::LinearRay& r) {
+      if (taken == have) {
+        if (pos == stop && !more(pos, stop)) return false;
+        have = std::min(kBatch, static_cast<std::size_t>(stop - pos));
+        detail::setup_linear_rays(map_->grid(), fan, pos, have, batch);
+        pos += have;
+        taken = 0;
+      }
+      r = batch[taken++];
+      return true;
+    };
+    return detail::walk_linear_rays(next, worker.miss.words());
   }
 
   void walk_hashed(ScanStats& st) {
@@ -738,9 +814,9 @@ class ScanInserter {
   // updated by one thread; the map's voxel count is summed afterwards).
 
   void apply_dense(ScanStats& st) {
-    const std::int64_t nbx = hit_bits_.bricks(0), nby = hit_bits_.bricks(1),
-                       rows = nby * hit_bits_.bricks(2);
-    const std::int64_t* lo = hit_bits_.lo();
+    const detail::ScanBitmap& shape = workers_[0]->hit;  // every bitmap has the scan's box
+    const std::int64_t nbx = shape.bricks(0), nby = shape.bricks(1), rows = nby * shape.bricks(2);
+    const std::int64_t* lo = shape.lo();
     const auto groups = static_cast<std::size_t>(
         std::min<std::int64_t>(rows, threads_ == 1 ? 1 : 8 * std::int64_t{threads_}));
     const auto rows_per_group = (static_cast<std::size_t>(rows) + groups - 1) / groups;
@@ -762,9 +838,10 @@ class ScanInserter {
         const auto last = std::min(rows, static_cast<std::int64_t>((g + 1) * rows_per_group));
         for (std::int64_t row = first; row < last; ++row) {  // rows differ: no shared words
           const std::int64_t by = row % nby, bz = row / nby;
-          hit_bits_.take_brick_row(by, bz, worker.row_hit.data());
-          for (unsigned t = 0; t < threads_; ++t)
+          for (unsigned t = 0; t < threads_; ++t) {
+            workers_[t]->hit.take_brick_row(by, bz, worker.row_hit.data());
             workers_[t]->miss.take_brick_row(by, bz, worker.row_miss.data());
+          }
           for (std::int64_t bx = 0; bx < nbx; ++bx) {
             VoxelMask& hit = worker.row_hit[static_cast<std::size_t>(bx)];
             VoxelMask& miss = worker.row_miss[static_cast<std::size_t>(bx)];
@@ -780,8 +857,10 @@ class ScanInserter {
       }
     };
     run(gather);
-    hit_bits_.mark_clean();
-    for (unsigned w = 0; w < threads_; ++w) workers_[w]->miss.mark_clean();
+    for (unsigned w = 0; w < threads_; ++w) {
+      workers_[w]->hit.mark_clean();
+      workers_[w]->miss.mark_clean();
+    }
     update_groups(st);
   }
 
@@ -916,7 +995,6 @@ class ScanInserter {
   std::size_t steps_ = 0;                        // sum of |end - origin|_1 over the rays
   std::int64_t key_min_[3] = {0, 0, 0}, key_max_[3] = {0, 0, 0};
   std::int64_t box_lo_[3] = {0, 0, 0}, box_size_[3] = {0, 0, 0};
-  detail::ScanBitmap hit_bits_;
   std::vector<std::vector<BrickUpdate>> groups_;  // touched bricks, z, y, x order overall
   std::size_t group_count_ = 0;
   std::vector<std::uint32_t> order_;  // hashed path: scratch slots in z, y, x order
@@ -942,5 +1020,3 @@ ScanStats insert_point_cloud(OccupancyMap<Key>& map, const Origin& origin, const
 }
 
 }  // namespace knnocc
-
-#undef KNNOCC_ALWAYS_INLINE

@@ -258,8 +258,9 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
 }
 
 TEST_CASE("insert_threads.four_ray_setup_matches_setup_walk") {
-  // setup_linear_rays (four rays at a time with AVX2) against setup_linear_ray (setup_walk),
-  // field by field and bit for bit, on rays in every direction, along axes and in planes.
+  // setup_linear_rays (eight and four rays at a time with AVX2) against setup_linear_ray
+  // (setup_walk), field by field and bit for bit, on rays in every direction, along axes and in
+  // planes.
   knnocc::test::Rng rng(8);
   std::uniform_real_distribution<float> u(-30.f, 30.f);
   for (const double res : {0.1, 0.05, 0.37}) {
@@ -311,15 +312,20 @@ TEST_CASE("insert_threads.four_ray_setup_matches_setup_walk") {
   const std::int64_t stride[3] = {1, 64, 64 * 64};
   const knnocc::detail::RayFan fan(grid, o, okey, lo, stride);
   const knnocc::detail::RayEnd ray{e, {ke[0], ke[1], ke[2]}};
-  const std::vector<knnocc::detail::RayEnd> rays(4, ray);
-  std::vector<knnocc::detail::LinearRay> fast(4);
-  knnocc::detail::setup_linear_rays(grid, fan, rays.data(), 4, fast.data());
+  const std::vector<knnocc::detail::RayEnd> rays(12, ray);  // eight at once, then four
+  std::vector<knnocc::detail::LinearRay> fast(12);
+  knnocc::detail::setup_linear_rays(grid, fan, rays.data(), 12, fast.data());
   knnocc::detail::LinearRay slow;
   knnocc::detail::setup_linear_ray(grid, fan, ray, slow);
-  for (int a = 0; a < 3; ++a) {
-    CHECK(fast[3].stride[a] == slow.stride[a]);
-    CHECK(std::memcmp(&fast[3].state.t_max[a], &slow.state.t_max[a], sizeof(double)) == 0);
-    CHECK(std::memcmp(&fast[3].state.t_delta[a], &slow.state.t_delta[a], sizeof(double)) == 0);
+  for (const int i : {3, 11}) {
+    CAPTURE(i);
+    CHECK(fast[i].end_index == slow.end_index);
+    CHECK(fast[i].state.steps_to_end == slow.state.steps_to_end);
+    for (int a = 0; a < 3; ++a) {
+      CHECK(fast[i].stride[a] == slow.stride[a]);
+      CHECK(std::memcmp(&fast[i].state.t_max[a], &slow.state.t_max[a], sizeof(double)) == 0);
+      CHECK(std::memcmp(&fast[i].state.t_delta[a], &slow.state.t_delta[a], sizeof(double)) == 0);
+    }
   }
   std::vector<OcKey> keys;
   REQUIRE(knnocc::compute_ray_keys(grid, o, e, keys));

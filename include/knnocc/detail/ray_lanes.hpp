@@ -233,6 +233,96 @@ KNNOCC_TARGET_AVX2 void setup_linear_rays4(const RayFan& fan, const RayEnd* rays
   }
 }
 
+// setup_linear_rays4() for eight rays: the float part (direction, length) eight lanes wide, the
+// double part in two halves whose divisions overlap, the integer part (steps, strides, end
+// voxel's bit) in vector registers too. The same operations on the same values as setup_walk().
+template <class Key>
+KNNOCC_TARGET_AVX2 void setup_linear_rays8(const RayFan& fan, const RayEnd* rays, LinearRay* out) {
+  alignas(32) float e[3][8];
+  alignas(32) std::int32_t key[3][8];
+  for (int k = 0; k < 8; ++k) {
+    e[0][k] = rays[k].end.x;
+    e[1][k] = rays[k].end.y;
+    e[2][k] = rays[k].end.z;
+    for (int a = 0; a < 3; ++a) key[a][k] = rays[k].key[a];
+  }
+  const float o[3] = {fan.origin.x, fan.origin.y, fan.origin.z};
+  __m256 dir[3];
+  for (int a = 0; a < 3; ++a) dir[a] = _mm256_sub_ps(_mm256_load_ps(e[a]), _mm256_set1_ps(o[a]));
+  // octomap_norm: float squares summed left to right, square root in double, back to float.
+  const __m256 sq =
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dir[0], dir[0]), _mm256_mul_ps(dir[1], dir[1])),
+                    _mm256_mul_ps(dir[2], dir[2]));
+  const __m256 length = _mm256_set_m128(
+      _mm256_cvtpd_ps(_mm256_sqrt_pd(_mm256_cvtps_pd(_mm256_extractf128_ps(sq, 1)))),
+      _mm256_cvtpd_ps(_mm256_sqrt_pd(_mm256_cvtps_pd(_mm256_castps256_ps128(sq)))));
+  alignas(32) double t_max[3][8], t_delta[3][8], len[8];
+  alignas(32) std::int64_t stride[3][8], end_index[8];
+  alignas(32) std::int32_t steps[8];
+  const __m256d zero = _mm256_setzero_pd(),
+                none = _mm256_set1_pd(std::numeric_limits<double>::max());
+  // The end voxel's bit index is an integer below 2^51 (box edges under 2^17), exact in double,
+  // and x + 1.5 * 2^52 holds x in its low mantissa bits: the conversion to int64 AVX2 lacks.
+  const __m256d magic = _mm256_set1_pd(6755399441055744.0);
+  __m256d index[2] = {zero, zero};
+  __m256i step_sum = _mm256_setzero_si256();
+  for (int a = 0; a < 3; ++a) {
+    const __m256 d8 = _mm256_div_ps(dir[a], length);
+    const __m256i k8 = _mm256_load_si256(reinterpret_cast<const __m256i*>(key[a]));
+    step_sum = _mm256_add_epi32(
+        step_sum, _mm256_abs_epi32(_mm256_sub_epi32(k8, _mm256_set1_epi32(fan.origin_key[a]))));
+    const __m256i from_lo = _mm256_sub_epi32(k8, _mm256_set1_epi32(static_cast<int>(fan.lo[a])));
+    const __m256d fan_stride = _mm256_set1_pd(static_cast<double>(fan.stride[a]));
+    const __m256i plus = _mm256_set1_epi64x(fan.stride[a]),
+                  minus = _mm256_set1_epi64x(-fan.stride[a]);
+    for (int h = 0; h < 2; ++h) {
+      const __m256d dd =
+          _mm256_cvtps_pd(h ? _mm256_extractf128_ps(d8, 1) : _mm256_castps256_ps128(d8));
+      const __m256d up = _mm256_cmp_pd(dd, zero, _CMP_GT_OQ);
+      const __m256d down = _mm256_cmp_pd(dd, zero, _CMP_LT_OQ);
+      // Step 0 (t_max and t_delta stay at max) where the direction is neither > 0 nor < 0: zero,
+      // or NaN when the length underflowed (end points 1e-23 apart across a voxel border).
+      const __m256d still = _mm256_cmp_pd(dd, zero, _CMP_EQ_UQ);
+      const __m256d border =
+          _mm256_blendv_pd(_mm256_set1_pd(fan.border[a][0]), _mm256_set1_pd(fan.border[a][1]), up);
+      const __m256d tm =
+          _mm256_div_pd(_mm256_sub_pd(border, _mm256_set1_pd(static_cast<double>(o[a]))), dd);
+      const __m256d abs_d = _mm256_andnot_pd(_mm256_set1_pd(-0.0), dd);
+      const __m256d td = _mm256_div_pd(_mm256_set1_pd(fan.resolution), abs_d);
+      _mm256_store_pd(t_max[a] + 4 * h, _mm256_blendv_pd(tm, none, still));
+      _mm256_store_pd(t_delta[a] + 4 * h, _mm256_blendv_pd(td, none, still));
+      // stride: +-fan.stride by the sign of the float direction, 0 where it is neither.
+      const __m256i s = _mm256_or_si256(_mm256_and_si256(_mm256_castpd_si256(up), plus),
+                                        _mm256_and_si256(_mm256_castpd_si256(down), minus));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(stride[a] + 4 * h), s);
+      const __m128i half =
+          h ? _mm256_extracti128_si256(from_lo, 1) : _mm256_castsi256_si128(from_lo);
+      index[h] = _mm256_add_pd(index[h], _mm256_mul_pd(_mm256_cvtepi32_pd(half), fan_stride));
+    }
+  }
+  for (int h = 0; h < 2; ++h) {
+    const __m256i bits = _mm256_castpd_si256(_mm256_add_pd(index[h], magic));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(end_index + 4 * h),
+                       _mm256_sub_epi64(bits, _mm256_castpd_si256(magic)));
+    _mm256_store_pd(len + 4 * h, _mm256_cvtps_pd(h ? _mm256_extractf128_ps(length, 1)
+                                                   : _mm256_castps256_ps128(length)));
+  }
+  _mm256_store_si256(reinterpret_cast<__m256i*>(steps), step_sum);
+  const std::int64_t origin_index = fan.index(fan.origin_key);
+  for (int k = 0; k < 8; ++k) {
+    LinearRay& r = out[k];
+    for (int a = 0; a < 3; ++a) {
+      r.state.t_max[a] = t_max[a][k];
+      r.state.t_delta[a] = t_delta[a][k];
+      r.stride[a] = stride[a][k];
+    }
+    r.state.length = len[k];
+    r.state.steps_to_end = steps[k];
+    r.index = origin_index;
+    r.end_index = end_index[k];
+  }
+}
+
 // Four rays, one per 64-bit lane: what every step needs (lengths and end voxels, needed only by
 // the steps that may end a lane, wait in the LaneBook: the step loop then has registers to spare).
 struct RayLanes {
@@ -590,8 +680,10 @@ KNNOCC_NOINLINE void setup_linear_rays(const Grid<Key>& grid, const RayFan& fan,
                                        std::size_t n, LinearRay* out) {
   std::size_t i = 0;
 #if KNNOCC_AVX2_LANES
-  if (cpu_has_avx2())
+  if (cpu_has_avx2()) {
+    for (; i + 8 <= n; i += 8) setup_linear_rays8<Key>(fan, rays + i, out + i);
     for (; i + 4 <= n; i += 4) setup_linear_rays4<Key>(fan, rays + i, out + i);
+  }
 #endif
   for (; i < n; ++i) setup_linear_ray(grid, fan, rays[i], out[i]);
 }

@@ -214,6 +214,13 @@ class ScanInserter {
     }
   };
 
+  // A large scan's point bounds over one thread's share (insert_chunked).
+  struct Bounds {
+    static constexpr std::size_t kSample = 8;  // every 8th point's distance is summed
+    float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    std::uint64_t sampled = 0;
+  };
+
   // One thread's scratch (separate allocations, so threads do not share cache lines).
   struct Worker {
     detail::ScanBitmap hit, miss;  // dense path: this thread's endpoints and free voxels
@@ -226,6 +233,7 @@ class ScanInserter {
     std::vector<VoxelMask> row_hit, row_miss;       // dense apply: one brick row
     std::size_t occupied = 0, free = 0, added = 0;  // apply: this thread's updates
     Part part;                                      // collect: this thread's share
+    Bounds bounds;                                  // insert_chunked: its share's bounds
 
     Scratch& scratch_for(std::uint64_t c) {
       if (last != detail::FlatIndex::kNone && c == last_coord) return scratch[last];
@@ -487,6 +495,40 @@ class ScanInserter {
   // Each thread takes chunks in turn and collects and walks them into its own bitmaps, all in one
   // run of the threads: small chunks keep the threads' shares even at the end of a scan.
 
+  // The coordinate bounds of the finite points in [a, b) and the origin, and the sum of the L1
+  // distances in voxels (rounded down, capped for max_range) from the origin of every kSample-th
+  // point: an integer, so the same for any split between threads.
+  template <class It>
+  Bounds point_bounds(It first, std::size_t a, std::size_t b, double max_range) const {
+    const Point3f o = origin_;
+    float lo[3] = {o.x, o.y, o.z}, hi[3] = {o.x, o.y, o.z};
+    for (std::size_t i = a; i < b; ++i) {
+      const Point3f p = to_point3f(first[static_cast<std::ptrdiff_t>(i)]);
+      // A non-finite point counts as the origin, which the bounds hold already: no branch.
+      const bool ok = detail::finite(p);
+      const float c[3] = {ok ? p.x : o.x, ok ? p.y : o.y, ok ? p.z : o.z};
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = std::min(lo[k], c[k]);
+        hi[k] = std::max(hi[k], c[k]);
+      }
+    }
+    Bounds out;
+    for (int k = 0; k < 3; ++k) {
+      out.lo[k] = lo[k];
+      out.hi[k] = hi[k];
+    }
+    const double inv = 1.0 / map_->resolution();
+    for (std::size_t i = (a + Bounds::kSample - 1) / Bounds::kSample * Bounds::kSample; i < b;
+         i += Bounds::kSample) {
+      const Point3f p = to_point3f(first[static_cast<std::ptrdiff_t>(i)]);
+      if (!detail::finite(p)) continue;
+      double d = std::fabs(p.x - o.x) + std::fabs(p.y - o.y) + std::fabs(p.z - o.z);
+      if (max_range > 0) d = std::min(d, 1.7320508075688772 * max_range);  // L1 <= sqrt(3) L2
+      out.sampled += static_cast<std::uint64_t>(std::min(d * inv, 1e15));
+    }
+    return out;
+  }
+
   template <class Points>
   bool insert_chunked(const Points& points, double max_range, ScanStats& st) {
     const auto first = std::begin(points);
@@ -494,26 +536,30 @@ class ScanInserter {
     if (n <= chunk_points) return false;
     start_collect();
     if (!origin_in_range_) return false;
-    float lo[3] = {origin_.x, origin_.y, origin_.z}, hi[3] = {origin_.x, origin_.y, origin_.z};
-    // A sample of the rays' lengths in voxels for dense_fits (it only picks the faster path).
-    const double inv = 1.0 / map_->resolution();
-    double sampled = 0;
-    constexpr std::size_t kSample = 8;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Point3f p = to_point3f(first[static_cast<std::ptrdiff_t>(i)]);
-      if (!detail::finite(p)) continue;
-      lo[0] = std::min(lo[0], p.x);
-      lo[1] = std::min(lo[1], p.y);
-      lo[2] = std::min(lo[2], p.z);
-      hi[0] = std::max(hi[0], p.x);
-      hi[1] = std::max(hi[1], p.y);
-      hi[2] = std::max(hi[2], p.z);
-      if (i % kSample == 0) {
-        double d =
-            std::fabs(p.x - origin_.x) + std::fabs(p.y - origin_.y) + std::fabs(p.z - origin_.z);
-        if (max_range > 0) d = std::min(d, 1.7320508075688772 * max_range);  // L1 <= sqrt(3) L2
-        sampled += d;
+    // The points' bounds (and a sample of the rays' lengths in voxels for dense_fits, which only
+    // picks the faster path), each thread over its share of the points.
+    const unsigned parts = n >= 2 * chunk_points ? threads_ : 1;
+    auto bound = [&](unsigned w) {
+      if (w < parts)
+        workers_[w]->bounds = point_bounds(first, n * w / parts, n * (w + 1) / parts, max_range);
+    };
+    if (parts == 1)
+      bound(0u);
+    else
+      run(bound);
+    float lo[3], hi[3];
+    std::uint64_t sampled = 0;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = workers_[0]->bounds.lo[a];
+      hi[a] = workers_[0]->bounds.hi[a];
+    }
+    for (unsigned w = 0; w < parts; ++w) {
+      const Bounds& b = workers_[w]->bounds;
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], b.lo[a]);
+        hi[a] = std::max(hi[a], b.hi[a]);
       }
+      sampled += b.sampled;
     }
     if (max_range > 0) {  // rays end within max_range of the origin (truncated past it)
       const float o[3] = {origin_.x, origin_.y, origin_.z};
@@ -531,7 +577,7 @@ class ScanInserter {
       key_min_[a] = std::int64_t{klo[a]} - 1;
       key_max_[a] = std::int64_t{khi[a]} + 1;
     }
-    steps_ = static_cast<std::size_t>(sampled * inv * kSample);
+    steps_ = static_cast<std::size_t>(sampled * Bounds::kSample);
     if (!dense_fits()) return false;
 
     prepare_dense();

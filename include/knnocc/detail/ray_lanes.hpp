@@ -382,19 +382,18 @@ KNNOCC_TARGET_AVX2 KNNOCC_ALWAYS_INLINE void advance_lanes(RayLanes& v) {
   v.index = _mm256_add_epi64(v.index, stride);
 }
 
-// One step on the four lanes of v; returns the lanes that may have ended (bit l).
-KNNOCC_TARGET_AVX2 KNNOCC_ALWAYS_INLINE int step_lanes(RayLanes& v, const LaneBook<4>& book,
-                                                       __m256d& tmin) {
+// One step on the four lanes of v; returns the lanes that ended (bit l).
+KNNOCC_TARGET_AVX2 KNNOCC_ALWAYS_INLINE unsigned step_lanes(RayLanes& v, const LaneBook<4>& book) {
   advance_lanes(v);
   // A lane ends on its end voxel (the bit index is one-to-one, so one comparison does what
   // walk_ray's countdown does) or once every next border lies beyond its length;
   // std::min(std::min(t0, t1), t2), operand order included (vminpd(b, a) = b < a ? b : a).
-  tmin = _mm256_min_pd(v.t2, _mm256_min_pd(v.t1, v.t0));
+  const __m256d tmin = _mm256_min_pd(v.t2, _mm256_min_pd(v.t1, v.t0));
   const __m256d length = _mm256_load_pd(book.length);
   const __m256i end = _mm256_load_si256(reinterpret_cast<const __m256i*>(book.end));
-  const __m256d may_end = _mm256_or_pd(_mm256_cmp_pd(tmin, length, _CMP_GT_OQ),
-                                       _mm256_castsi256_pd(_mm256_cmpeq_epi64(v.index, end)));
-  return _mm256_movemask_pd(may_end);
+  const __m256d ended = _mm256_or_pd(_mm256_cmp_pd(tmin, length, _CMP_GT_OQ),
+                                     _mm256_castsi256_pd(_mm256_cmpeq_epi64(v.index, end)));
+  return static_cast<unsigned>(_mm256_movemask_pd(ended));
 }
 
 // One store of the four indices, then scalar shifts (as in the eight-lane walk): the indices go
@@ -446,21 +445,11 @@ KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* 
     }
 
     // A lane may end: one step with the end test.
-    __m256d tmin;
-    const int ended = step_lanes(v, book, tmin);
+    unsigned done = step_lanes(v, book);
     ++book.iteration;
-    if (ended) {
+    if (done) {
       // The lanes that ended take the next rays of the stream; a refilled lane stands on its new
       // ray's origin voxel, so the marking below covers it like the others.
-      alignas(32) double tm[kLanes];
-      alignas(32) std::int64_t idx[kLanes];
-      _mm256_store_pd(tm, tmin);
-      _mm256_store_si256(reinterpret_cast<__m256i*>(idx), v.index);
-      unsigned done = 0;
-      for (unsigned m = static_cast<unsigned>(ended); m; m &= m - 1) {
-        const int l = __builtin_ctz(m);
-        if (idx[l] == book.end[l] || tm[l] > book.length[l]) done |= 1u << l;
-      }
       for (unsigned m = done; m; m &= m - 1) {
         const int l = __builtin_ctz(m);
         if (next(r)) {

@@ -8,8 +8,8 @@
 //   DIR defaults to ../shared/data (run from the project root). Uses
 //   octomap_fr079/scan.dat.bz2 (decompressed into build/data/ on first use) and
 //   tum_fr2_pioneer_slam2 (10 Kinect clouds). Resolutions default to 0.1 and 0.05, threads to
-//   1 and 2. The runs go in --rounds rounds (default 2), each of --repeat knnocc runs per thread
-//   count (default 3, each on a fresh map and inserter) and one liboctomap run, so that both
+//   1 and 2. The runs go in --rounds rounds (default 3), each of --repeat knnocc runs per thread
+//   count (default 2, each on a fresh map and inserter) and one liboctomap run, so that both
 //   libraries meet the same spells of a noisy machine; each time printed is a library's best,
 //   with its spread (slowest / best) over the runs.
 
@@ -172,7 +172,7 @@ std::pair<Result, double> in_child(F f) {
 int main(int argc, char** argv) {
   std::vector<double> resolutions;
   std::vector<unsigned> threads;
-  int repeat = 3, rounds = 2;
+  int repeat = 2, rounds = 3;
   fs::path data = fs::path("..") / "shared" / "data";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];

@@ -8,7 +8,9 @@
 // One scan is a few runs in quick succession, and waking a thread that sleeps on a condition
 // variable took 16 us per run on the project's virtual machine. So between runs the workers
 // first spin (for kSpin) on the run counter, and only then sleep; run() likewise spins a while
-// for the workers to finish before it sleeps. Idle workers stop using the CPU after kSpin.
+// for the workers to finish before it sleeps. Idle workers stop using the CPU after kSpin. A pool
+// of more threads than the machine has hardware threads never spins: a spinning worker would take
+// a core from a thread with work.
 
 #include <atomic>
 #include <chrono>
@@ -39,7 +41,8 @@ class ThreadPool {
   /// How long a worker spins for the next run, and run() for the workers, before sleeping.
   static constexpr std::chrono::microseconds kSpin{200};
 
-  explicit ThreadPool(unsigned size) : size_(size < 1 ? 1 : size) {
+  explicit ThreadPool(unsigned size)
+      : size_(size < 1 ? 1 : size), spin_(size_ <= std::thread::hardware_concurrency()) {
     threads_.reserve(size_ - 1);
     for (unsigned w = 1; w < size_; ++w) threads_.emplace_back([this, w] { work(w); });
   }
@@ -72,7 +75,7 @@ class ThreadPool {
     }
     wake_.notify_all();
     run_guarded(0);
-    if (!spin_until([this] { return pending_.load(std::memory_order_acquire) == 0; })) {
+    if (!spin_until([this] { return pending_.load(std::memory_order_acquire) == 0; }, spin_)) {
       std::unique_lock<std::mutex> lock(mutex_);
       done_.wait(lock, [this] { return pending_.load(std::memory_order_acquire) == 0; });
     }
@@ -87,9 +90,10 @@ class ThreadPool {
   }
 
  private:
-  // Spins until done() or kSpin has passed; returns done().
+  // Spins until done() or kSpin has passed (not at all unless `spin`); returns done().
   template <class Done>
-  static bool spin_until(Done done) {
+  static bool spin_until(Done done, bool spin) {
+    if (!spin) return done();
     const auto deadline = std::chrono::steady_clock::now() + kSpin;
     for (;;) {
       for (int i = 0; i < 64; ++i) {
@@ -120,7 +124,7 @@ class ThreadPool {
              generation_.load(std::memory_order_acquire) != seen;
     };
     for (;;) {
-      if (!spin_until(next_run)) {
+      if (!spin_until(next_run, spin_)) {
         std::unique_lock<std::mutex> lock(mutex_);
         wake_.wait(lock, next_run);
       }
@@ -136,6 +140,7 @@ class ThreadPool {
   }
 
   unsigned size_;
+  bool spin_;  // no more threads than hardware threads
   std::vector<std::thread> threads_;
   std::mutex mutex_;
   std::condition_variable wake_, done_;

@@ -10,9 +10,11 @@
 // per 64-bit lane, with walk_ray()'s comparisons in branch-free form: the same comparisons on the
 // same doubles, so exactly the same voxels; CPUs with AVX-512F walk eight rays at once the same
 // way (KNNOCC_NO_AVX512 keeps them on four lanes). A lane whose ray ends takes the next ray of
-// the stream; when the stream runs dry the remaining rays finish on the scalar walk. The set-up
-// of the rays (setup_walk) goes four at a time as well. Elsewhere (no AVX2, other architectures,
-// or KNNOCC_NO_SIMD defined) everything runs on the scalar code, with the same results.
+// the stream; when the stream runs dry the remaining rays finish on the scalar walk. The four-lane
+// walk tests for ends only in the steps where a lane can end (unchecked_steps): most steps are
+// plain steps. The set-up of the rays (setup_walk) goes eight or four at a time as well.
+// Elsewhere (no AVX2, other architectures, or KNNOCC_NO_SIMD defined) everything runs on the
+// scalar code, with the same results.
 
 #include <algorithm>
 #include <cstddef>

@@ -547,12 +547,8 @@ class ScanInserter {
       bound(0u);
     else
       run(bound);
-    float lo[3], hi[3];
+    float lo[3] = {origin_.x, origin_.y, origin_.z}, hi[3] = {origin_.x, origin_.y, origin_.z};
     std::uint64_t sampled = 0;
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = workers_[0]->bounds.lo[a];
-      hi[a] = workers_[0]->bounds.hi[a];
-    }
     for (unsigned w = 0; w < parts; ++w) {
       const Bounds& b = workers_[w]->bounds;
       for (int a = 0; a < 3; ++a) {
@@ -600,12 +596,11 @@ class ScanInserter {
             .add_points(first + static_cast<std::ptrdiff_t>(a),
                         first + static_cast<std::ptrdiff_t>(b), nullptr);
         mark_hits(worker);
-        const Ray* rays = part.rays.data();
-        std::size_t left = part.rays.size();
+        bool given = false;  // the chunk's rays, handed out once
         worker.visits += walk_dense_rays(worker, fan, [&](const Ray*& pos, const Ray*& stop) {
-          pos = rays;
-          stop = rays + left;
-          left = 0;
+          pos = part.rays.data();
+          stop = given ? pos : pos + part.rays.size();
+          given = true;
           return pos != stop;
         });
       }

@@ -120,9 +120,11 @@ class ScanInserter {
     while (workers_.size() < threads_) workers_.push_back(std::make_unique<Worker>());
   }
 
-  /// Address space the dense per-scan scratch may take, all threads together (default 256 MB;
-  /// pages no ray touches stay unmapped, so resident memory is usually far less). A scan whose
-  /// box needs more uses the hashed scratch (slower, same map); 0 always does.
+  /// Address space the dense per-scan scratch may take, all threads together (default 384 MB,
+  /// two bitmaps per thread: two threads keep the boxes that fitted 256 MB when a scan had one
+  /// bitmap per thread and one shared; pages no ray touches stay unmapped, so resident memory is
+  /// usually far less). A scan whose box needs more uses the hashed scratch (slower, same map);
+  /// 0 always does.
   void set_scratch_limit(std::size_t bytes) { scratch_limit_ = bytes; }
   std::size_t scratch_limit() const { return scratch_limit_; }
 
@@ -1018,7 +1020,7 @@ class ScanInserter {
   map_type* map_;
   Model model_;
   unsigned threads_ = 0;
-  std::size_t scratch_limit_ = std::size_t{256} << 20;
+  std::size_t scratch_limit_ = std::size_t{384} << 20;
   std::unique_ptr<detail::ThreadPool> pool_;      // created on the first multithreaded scan
   std::vector<std::unique_ptr<Worker>> workers_;  // [0] is the calling thread's
   // Next chunk of work to take (on the heap so that the inserter stays movable).

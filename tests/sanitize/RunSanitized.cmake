@@ -1,15 +1,16 @@
 # AddressSanitizer + UndefinedBehaviorSanitizer run of the test suite (ctest test
-# sanitizer.asan_ubsan): the whole project configured in a nested tree with clang++ and
-# KNNOCC_SANITIZE=address,undefined, then the doctest suite, the tool's CLI checks, the examples,
-# the no-exceptions smoke test and the libFuzzer harnesses (tests/fuzz, FUZZ_SECONDS each) run
-# there. Any report is fatal (-fno-sanitize-recover=all).
+# sanitizer.asan_ubsan): the whole project configured in a nested tree with clang++,
+# KNNOCC_SANITIZE=address,undefined and -Werror (so this build also proves every target
+# warning-free on clang), then the doctest suite, the tool's CLI checks, the examples, the
+# no-exceptions smoke test and the libFuzzer harnesses (tests/fuzz, FUZZ_SECONDS each) run there.
+# Any report is fatal (-fno-sanitize-recover=all).
 #   -DCXX=<clang++> -DROOT=<project root> -DWORK_DIR=<build dir> [-DFUZZ_SECONDS=<s>]
 if(NOT FUZZ_SECONDS)
   set(FUZZ_SECONDS 30)
 endif()
 execute_process(COMMAND "${CMAKE_COMMAND}" -S "${ROOT}" -B "${WORK_DIR}"
     -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_BUILD_TYPE=RelWithDebInfo
-    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g" -DKNNOCC_SANITIZE=address,undefined
+    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g" -DKNNOCC_SANITIZE=address,undefined -DKNNOCC_WERROR=ON
     -DKNNOCC_BUILD_BENCH=OFF -DKNNOCC_INSTALL=OFF -DKNNOCC_BUILD_FUZZERS=ON
     -DKNNOCC_FUZZ_SECONDS=${FUZZ_SECONDS}
   RESULT_VARIABLE _rc)
@@ -20,7 +21,7 @@ execute_process(COMMAND "${CMAKE_COMMAND}" --build "${WORK_DIR}" -j2
     --target all
   RESULT_VARIABLE _rc)
 if(NOT _rc EQUAL 0)
-  message(FATAL_ERROR "building with -fsanitize=address,undefined failed")
+  message(FATAL_ERROR "building with clang -Werror -fsanitize=address,undefined failed")
 endif()
 set(ENV{ASAN_OPTIONS} "detect_leaks=1:abort_on_error=0:strict_string_checks=1:detect_stack_use_after_return=1")
 set(ENV{UBSAN_OPTIONS} "print_stacktrace=1:halt_on_error=1")

@@ -23,7 +23,8 @@
 //      Each thread takes chunks of rays into its own scratch; free and occupied are unions, so
 //      the result does not depend on which thread walked which ray.
 //      Large scans whose dense box is known in advance run 1 and 2 a chunk of points at a time
-//      into the same scratch (insert_chunked), which bounds the per-point buffers.
+//      (insert_chunked): each thread takes chunks in turn, collects them and walks their rays
+//      into its own scratch, all in one run of the threads; this bounds the per-point buffers.
 //   3. apply: the touched bricks with the thread scratches OR-ed, gathered in z, y, x brick order
 //      whatever the path or thread count; the missing map bricks created in that order (one
 //      thread), then every touched voxel updated exactly once, occupied first (each brick by one

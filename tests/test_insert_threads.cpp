@@ -257,10 +257,10 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
 #endif
 }
 
-TEST_CASE("insert_threads.four_ray_setup_matches_setup_walk") {
-  // setup_linear_rays (eight and four rays at a time with AVX2) against setup_linear_ray
-  // (setup_walk), field by field and bit for bit, on rays in every direction, along axes and in
-  // planes.
+TEST_CASE("insert_threads.simd_ray_setup_matches_setup_walk") {
+  // setup_linear_rays (eight rays at a time with AVX2, the rest one by one) against
+  // setup_linear_ray (setup_walk), field by field and bit for bit, on rays in every direction,
+  // along axes and in planes.
   knnocc::test::Rng rng(8);
   std::uniform_real_distribution<float> u(-30.f, 30.f);
   for (const double res : {0.1, 0.05, 0.37}) {
@@ -312,7 +312,7 @@ TEST_CASE("insert_threads.four_ray_setup_matches_setup_walk") {
   const std::int64_t stride[3] = {1, 64, 64 * 64};
   const knnocc::detail::RayFan fan(grid, o, okey, lo, stride);
   const knnocc::detail::RayEnd ray{e, {ke[0], ke[1], ke[2]}};
-  const std::vector<knnocc::detail::RayEnd> rays(12, ray);  // eight at once, then four
+  const std::vector<knnocc::detail::RayEnd> rays(12, ray);  // eight at once, then one by one
   std::vector<knnocc::detail::LinearRay> fast(12);
   knnocc::detail::setup_linear_rays(grid, fan, rays.data(), 12, fast.data());
   knnocc::detail::LinearRay slow;

@@ -12,7 +12,7 @@
 // way (KNNOCC_NO_AVX512 keeps them on four lanes). A lane whose ray ends takes the next ray of
 // the stream; when the stream runs dry the remaining rays finish on the scalar walk. The four-lane
 // walk tests for ends only in the steps where a lane can end (unchecked_steps): most steps are
-// plain steps. The set-up of the rays (setup_walk) goes eight or four at a time as well.
+// plain steps. The set-up of the rays (setup_walk) goes eight at a time as well.
 // Elsewhere (no AVX2, other architectures, or KNNOCC_NO_SIMD defined) everything runs on the
 // scalar code, with the same results.
 
@@ -177,67 +177,11 @@ inline bool cpu_has_avx2() {
 #endif
 }
 
-// setup_linear_ray() for four rays at once: setup_walk()'s float and double operations in the
+// setup_linear_ray() for eight rays at once: setup_walk()'s float and double operations in the
 // same order (square root, divisions and conversions are correctly rounded in SIMD as in scalar
-// code), so the same bits; a test compares the two.
-template <class Key>
-KNNOCC_TARGET_AVX2 void setup_linear_rays4(const RayFan& fan, const RayEnd* rays, LinearRay* out) {
-  alignas(16) float e[3][4];
-  for (int k = 0; k < 4; ++k) {
-    e[0][k] = rays[k].end.x;
-    e[1][k] = rays[k].end.y;
-    e[2][k] = rays[k].end.z;
-  }
-  const float o[3] = {fan.origin.x, fan.origin.y, fan.origin.z};
-  __m128 dir[3];
-  for (int a = 0; a < 3; ++a) dir[a] = _mm_sub_ps(_mm_load_ps(e[a]), _mm_set1_ps(o[a]));
-  // octomap_norm: float squares summed left to right, square root in double, back to float.
-  const __m128 sq = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dir[0], dir[0]), _mm_mul_ps(dir[1], dir[1])),
-                               _mm_mul_ps(dir[2], dir[2]));
-  const __m128 length = _mm256_cvtpd_ps(_mm256_sqrt_pd(_mm256_cvtps_pd(sq)));
-  alignas(32) double t_max[3][4], t_delta[3][4], len[4];
-  alignas(16) float unit[3][4];
-  const __m256d zero = _mm256_setzero_pd(),
-                none = _mm256_set1_pd(std::numeric_limits<double>::max());
-  for (int a = 0; a < 3; ++a) {
-    const __m128 d = _mm_div_ps(dir[a], length);
-    _mm_store_ps(unit[a], d);
-    const __m256d dd = _mm256_cvtps_pd(d);
-    const __m256d up = _mm256_cmp_pd(dd, zero, _CMP_GT_OQ);
-    // Step 0 (t_max and t_delta stay at max) where the direction is neither > 0 nor < 0: zero,
-    // or NaN when the length underflowed (end points 1e-23 apart across a voxel border).
-    const __m256d still = _mm256_cmp_pd(dd, zero, _CMP_EQ_UQ);
-    const __m256d border =
-        _mm256_blendv_pd(_mm256_set1_pd(fan.border[a][0]), _mm256_set1_pd(fan.border[a][1]), up);
-    const __m256d tm =
-        _mm256_div_pd(_mm256_sub_pd(border, _mm256_set1_pd(static_cast<double>(o[a]))), dd);
-    const __m256d abs_d = _mm256_andnot_pd(_mm256_set1_pd(-0.0), dd);
-    const __m256d td = _mm256_div_pd(_mm256_set1_pd(fan.resolution), abs_d);
-    _mm256_store_pd(t_max[a], _mm256_blendv_pd(tm, none, still));
-    _mm256_store_pd(t_delta[a], _mm256_blendv_pd(td, none, still));
-  }
-  _mm256_store_pd(len, _mm256_cvtps_pd(length));
-  const std::int64_t origin_index = fan.index(fan.origin_key);
-  for (int k = 0; k < 4; ++k) {
-    LinearRay& r = out[k];
-    r.state.length = len[k];
-    r.state.steps_to_end = 0;
-    for (int a = 0; a < 3; ++a) {
-      r.state.t_max[a] = t_max[a][k];
-      r.state.t_delta[a] = t_delta[a][k];
-      r.state.steps_to_end +=
-          std::llabs(static_cast<std::int64_t>(rays[k].key[a]) - fan.origin_key[a]);
-      const int step = unit[a][k] > 0.0f ? 1 : (unit[a][k] < 0.0f ? -1 : 0);
-      r.stride[a] = step * fan.stride[a];
-    }
-    r.index = origin_index;
-    r.end_index = fan.index(rays[k].key);
-  }
-}
-
-// setup_linear_rays4() for eight rays: the float part (direction, length) eight lanes wide, the
-// double part in two halves whose divisions overlap, the integer part (steps, strides, end
-// voxel's bit) in vector registers too. The same operations on the same values as setup_walk().
+// code), so the same bits; a test compares the two. The float part (direction, length) is eight
+// lanes wide, the double part in two halves whose divisions overlap, the integer part (steps,
+// strides, end voxel's bit) in vector registers too.
 template <class Key>
 KNNOCC_TARGET_AVX2 void setup_linear_rays8(const RayFan& fan, const RayEnd* rays, LinearRay* out) {
   alignas(32) float e[3][8];
@@ -662,7 +606,7 @@ std::size_t walk_linear_rays(Next& next, std::uint64_t* bits) {
   return walk_linear_rays_scalar(next, bits);
 }
 
-/// setup_linear_ray() for rays[0..n), four at a time on AVX2 machines. Never inlined: callers
+/// setup_linear_ray() for rays[0..n), eight at a time on AVX2 machines. Never inlined: callers
 /// call it from inside the AVX-512 walk (the ray stream's refill), whose target enables FMA, and
 /// contracting OctoMap's float arithmetic there (-ffp-contract=fast, GCC's default for gnu++17,
 /// or clang's default "on") would change bits; compiled on its own it keeps the caller's flags.
@@ -671,10 +615,8 @@ KNNOCC_NOINLINE void setup_linear_rays(const Grid<Key>& grid, const RayFan& fan,
                                        std::size_t n, LinearRay* out) {
   std::size_t i = 0;
 #if KNNOCC_AVX2_LANES
-  if (cpu_has_avx2()) {
+  if (cpu_has_avx2())
     for (; i + 8 <= n; i += 8) setup_linear_rays8<Key>(fan, rays + i, out + i);
-    for (; i + 4 <= n; i += 4) setup_linear_rays4<Key>(fan, rays + i, out + i);
-  }
 #endif
   for (; i < n; ++i) setup_linear_ray(grid, fan, rays[i], out[i]);
 }

@@ -17,13 +17,9 @@
 
 using namespace knnocc;
 
-namespace {
+using knnocc::test::voxel_values;
 
-std::map<std::uint64_t, float> values_of(const OccupancyMap<OcKey>& map) {
-  std::map<std::uint64_t, float> out;
-  map.for_each_voxel([&](const OcKey& k, float v) { out[k.pack()] = v; });
-  return out;
-}
+namespace {
 
 // A small surface patch: every point has close neighbours.
 std::vector<Point3d> patch(int n = 40) {
@@ -50,7 +46,7 @@ TEST_CASE_TEMPLATE("bad_input: NaN/Inf and huge points are skipped and counted, 
   const KeyframeStats ks = dirty.insert_keyframe(Point3d{0, 0, 0.2}, bad);
   CHECK(ks.scan.points == bad.size());
   CHECK(ks.scan.nonfinite == 4);
-  CHECK(values_of(dirty.map()) == values_of(clean.map()));
+  CHECK(voxel_values(dirty.map()) == voxel_values(clean.map()));
   if constexpr (Mapper<Model>::uses_map_cloud) CHECK(dirty.tracker().size() == good.size());
 }
 
@@ -64,7 +60,7 @@ TEST_CASE_TEMPLATE("bad_input: points outside the key range are skipped and coun
   clean.insert_keyframe(Point3d{0, 0, 0.2}, good);
   const KeyframeStats ks = dirty.insert_keyframe(Point3d{0, 0, 0.2}, bad);
   CHECK(ks.scan.out_of_range == 2);
-  CHECK(values_of(dirty.map()) == values_of(clean.map()));
+  CHECK(voxel_values(dirty.map()) == voxel_values(clean.map()));
   if constexpr (Mapper<Model>::uses_map_cloud) CHECK(dirty.tracker().size() == good.size());
   // The same points fit WideKey maps (21 bits: +-104 km at 0.1 m).
   Mapper<Model, WideKey> wide(0.1);
@@ -77,9 +73,9 @@ TEST_CASE_TEMPLATE("bad_input: an empty cloud is a no-op", Model, OctoMapModel, 
   CHECK(ks.scan.points == 0);
   CHECK(m.map().empty());
   m.insert_keyframe(Point3d{0, 0, 0.2}, patch());
-  const auto before = values_of(m.map());
+  const auto before = voxel_values(m.map());
   m.insert_keyframe(Point3d{0, 0, 0}, std::vector<Point3d>{});
-  CHECK(values_of(m.map()) == before);
+  CHECK(voxel_values(m.map()) == before);
 }
 
 TEST_CASE("bad_input: duplicate points (s = 0, sigma = 0) get the defined sigma = 0 rating") {

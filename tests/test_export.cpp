@@ -21,15 +21,12 @@ namespace io = knnocc::io;
 using knnocc::OccupancyMap;
 using knnocc::OcKey;
 
+using knnocc::test::read_file;
+
 namespace {
 
-std::string scratch(const std::string& name) {
-  return (knnocc::test::scratch_dir("export") / name).string();
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+std::string export_file(const std::string& name) {
+  return knnocc::test::scratch_file("export", name);
 }
 
 std::uint32_t be32(const std::string& s, std::size_t at) {
@@ -119,9 +116,9 @@ TEST_CASE("png.written images decode to the same pixels") {
   for (const auto& [w, h] : {std::pair<std::uint32_t, std::uint32_t>{1, 1}, {3, 2}, {257, 130}}) {
     std::vector<std::uint8_t> rgb(std::size_t{w} * h * 3);
     for (auto& v : rgb) v = static_cast<std::uint8_t>(rng());
-    const std::string path = scratch("image.png");
+    const std::string path = export_file("image.png");
     io::write_png(path, w, h, rgb);
-    const Decoded d = decode_png(slurp(path));
+    const Decoded d = decode_png(read_file(path));
     CHECK(d.width == w);
     CHECK(d.height == h);
     CHECK(d.rgb == rgb);
@@ -129,8 +126,8 @@ TEST_CASE("png.written images decode to the same pixels") {
   }
   CHECK_THROWS_AS(io::encode_png(2, 2, std::vector<std::uint8_t>(11)), io::Error);
   CHECK_THROWS_AS(io::encode_png(0, 2, {}), io::Error);
-  CHECK_THROWS_WITH_AS(io::write_png(scratch("bad.png"), 4, 4, {}), doctest::Contains("bad.png"),
-                       io::Error);
+  CHECK_THROWS_WITH_AS(io::write_png(export_file("bad.png"), 4, 4, {}),
+                       doctest::Contains("bad.png"), io::Error);
 }
 
 TEST_CASE("voxel_export.points and cubes read back") {
@@ -139,7 +136,7 @@ TEST_CASE("voxel_export.points and cubes read back") {
   map.set(OcKey(32768, 32768, 32768), p.clamp_max);  // centre (0.1, 0.1, 0.1)
   map.set(OcKey(32770, 32767, 32780), 0.5f);         // centre (0.5, -0.1, 2.5)
   map.set(OcKey(32771, 32767, 32780), -1.0f);        // free
-  const std::string path = scratch("voxels.ply");
+  const std::string path = export_file("voxels.ply");
   for (const bool binary : {true, false}) {
     CAPTURE(binary);
     io::VoxelExportOptions o;
@@ -149,7 +146,7 @@ TEST_CASE("voxel_export.points and cubes read back") {
     REQUIRE(c.points.size() == 2);
     CHECK(c.points[0].x == doctest::Approx(0.1));
     CHECK(c.points[1].z == doctest::Approx(2.5));
-    const std::string text = slurp(path);
+    const std::string text = read_file(path);
     CHECK(text.find("property float logodds") != std::string::npos);
     o.which = io::VoxelSelection::all;
     CHECK(io::write_voxels_ply(path, map, o) == 3);
@@ -166,7 +163,7 @@ TEST_CASE("voxel_export.points and cubes read back") {
       CHECK(v.y == doctest::Approx((k & 2) ? 0.2 : 0.0));
       CHECK(v.z == doctest::Approx((k & 4) ? 0.2 : 0.0));
     }
-    const std::string mesh = slurp(path);
+    const std::string mesh = read_file(path);
     CHECK(mesh.find("element face 12\nproperty list uchar int vertex_indices") !=
           std::string::npos);
     if (binary) {
@@ -209,9 +206,9 @@ TEST_CASE("map_picture.top and side views") {
   CHECK(side != std::array<int, 3>{225, 228, 232});
   CHECK(at(8 + 7, 8 + 4 + 8 + 2) == std::array<int, 3>{225, 228, 232});
 
-  const std::string path = scratch("map.png");
+  const std::string path = export_file("map.png");
   knnocc::cli::write_map_png(path, map);
-  const Decoded d = decode_png(slurp(path));
+  const Decoded d = decode_png(read_file(path));
   CHECK(d.rgb == pic.rgb);
   CHECK_THROWS_WITH_AS(knnocc::cli::write_map_png(path, OccupancyMap<OcKey>(0.1)),
                        doctest::Contains("empty"), io::Error);

@@ -16,6 +16,8 @@
 
 using namespace knnocc;
 
+using knnocc::test::voxel_values;
+
 namespace {
 
 struct RatedScan {
@@ -40,12 +42,6 @@ RatedScan random_scan(test::Rng& rng, float ox) {
   s.points[17] = {std::nanf(""), 0, 0};
   s.points[99] = {40.0f, 1.0f, 0.0f};  // beyond max range 6 (as are some box corners)
   return s;
-}
-
-std::map<std::uint64_t, float> values_of(const OccupancyMap<OcKey>& map) {
-  std::map<std::uint64_t, float> out;
-  map.for_each_voxel([&](const OcKey& k, float v) { out[k.pack()] = v; });
-  return out;
 }
 
 // Returns how many points lie beyond max_range.
@@ -90,7 +86,7 @@ TEST_CASE("insert_rated.threads_scratch_paths_and_change_detection_match_the_ora
   for (const RatedScan& s : scans)
     beyond.push_back(oracle_insert(want, s, max_range, model.miss_logodds()));
   CHECK(beyond[0] >= 1);
-  const auto expected = values_of(want);
+  const auto expected = voxel_values(want);
   REQUIRE(expected.size() > 50000);
 
   for (const unsigned threads : {1u, 3u})
@@ -109,7 +105,7 @@ TEST_CASE("insert_rated.threads_scratch_paths_and_change_detection_match_the_ora
           CHECK(st.nonfinite == 1);
           CHECK(st.beyond_max_range == beyond[i]);
         }
-        CHECK(values_of(map) == expected);
+        CHECK(voxel_values(map) == expected);
         if (changes) {
           std::size_t recorded = 0;
           map.for_each_changed_key([&](const OcKey&, bool) { ++recorded; });

@@ -24,10 +24,7 @@ using knnocc::WideKey;
 
 namespace {
 
-struct Scan {
-  Point3f origin;
-  std::vector<Point3f> points;
-};
+using knnocc::test::Scan;
 
 // A room-like scene: most points on walls and a floor, some inside, a few far away or invalid.
 std::vector<Scan> random_scans(std::uint64_t seed, int scans, int points) {

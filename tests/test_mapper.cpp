@@ -25,6 +25,8 @@
 
 using namespace knnocc;
 
+using knnocc::test::voxel_values;
+
 namespace {
 
 struct Keyframe {
@@ -71,13 +73,6 @@ std::vector<Keyframe> random_sequence(test::Rng& rng, bool with_ids, std::size_t
 }
 
 using ValueMap = std::map<std::uint64_t, float>;
-
-template <class Key>
-ValueMap values_of(const OccupancyMap<Key>& map) {
-  ValueMap out;
-  map.for_each_voxel([&](const Key& k, float v) { out[k.pack()] = v; });
-  return out;
-}
 
 // The paper, literally, with nothing shared with the Mapper but the map's update rule and the
 // DDA (both tested against OctoMap elsewhere).
@@ -132,7 +127,7 @@ ValueMap knn_oracle(const std::vector<Keyframe>& kfs, double res, const KnnModel
       if (!occupied.count(k)) map.update(OcKey::unpack(k), logodds(p.p_free));
     for (const auto& [k, sum] : occupied) map.update(OcKey::unpack(k), static_cast<float>(sum));
   }
-  return values_of(map);
+  return voxel_values(map);
 }
 
 // Same keys; values equal up to the rounding of the distribution (Welford vs two passes).
@@ -162,7 +157,7 @@ TEST_CASE("mapper: the OctoMap model through the Mapper is ScanInserter's insert
       CHECK(ks.scan.occupied_voxels == st.occupied_voxels);
       CHECK(ks.scan.free_voxels == st.free_voxels);
     }
-    CHECK(values_of(mapper.map()) == values_of(reference));
+    CHECK(voxel_values(mapper.map()) == voxel_values(reference));
   }
 }
 
@@ -187,7 +182,7 @@ TEST_CASE("mapper: the k-NN model equals the paper's Alg. 2 + Alg. 3 done by bru
       }
       CHECK(rays > 0);      // the scene has reliable endpoints ...
       CHECK(rays < rated);  // ... and unreliable ones
-      expect_same(values_of(mapper.map()), knn_oracle(kfs, 0.1, p, max_range));
+      expect_same(voxel_values(mapper.map()), knn_oracle(kfs, 0.1, p, max_range));
     }
 }
 
@@ -239,8 +234,8 @@ TEST_CASE("mapper: the k-NN map does not depend on the thread count or the chang
       if (seen.insert(kf.ids[j]).second) cs.added.push_back({kf.ids[j], kf.points[j]});
     explicit_change.insert_keyframe(kf.origin, kf.points, kf.ids, cs);
   }
-  CHECK(values_of(one.map()) == values_of(three.map()));
-  CHECK(values_of(one.map()) == values_of(explicit_change.map()));
+  CHECK(voxel_values(one.map()) == voxel_values(three.map()));
+  CHECK(voxel_values(one.map()) == voxel_values(explicit_change.map()));
   CHECK(one.tracker().size() == seen.size());
 }
 

@@ -30,10 +30,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-struct Scan {
-  Point3f origin;
-  std::vector<Point3f> points;
-};
+using knnocc::test::Scan;
 
 std::vector<Scan> tum_scans() {
   std::vector<Scan> scans;

@@ -34,22 +34,13 @@ using knnocc::OccupancyMap;
 using knnocc::OcKey;
 using knnocc::Point3f;
 
+using knnocc::test::read_file;
+using knnocc::test::write_file;
+
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void spit(const std::string& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
-
-std::string scratch(const std::string& name) {
-  return (knnocc::test::scratch_dir("octomap_tree") / name).string();
+std::string tree_file(const std::string& name) {
+  return knnocc::test::scratch_file("octomap_tree", name);
 }
 
 // Every known voxel of a equals b's (and the counts match), values compared exactly.
@@ -120,30 +111,30 @@ TEST_CASE("octomap_tree.geb079 round trip gives identical bytes") {
   MESSAGE("geb079: " << counts.occupied << " occupied, " << counts.free
                      << " free finest voxels; map memory " << map.memory_usage() / 1e6 << " MB");
 
-  const std::string original = slurp(path);
+  const std::string original = read_file(path);
   const std::string ours = io::encode_bt(map);
   CHECK(ours.size() == original.size());
   CHECK(ours == original);
-  const std::string out = scratch("geb079_copy.bt");
+  const std::string out = tree_file("geb079_copy.bt");
   io::write_bt(out, map);
-  CHECK(slurp(out) == original);
+  CHECK(read_file(out) == original);
   CHECK(!fs::exists(out + ".tmp"));
 
   // .ot of the same map, read back: the same voxels and values.
-  const std::string ot = scratch("geb079.ot");
+  const std::string ot = tree_file("geb079.ot");
   io::write_ot(ot, map);
   check_same_voxels(map, io::read_octree(ot));
 }
 
 TEST_CASE("octomap_tree.round trips of a mixed map") {
   const OccupancyMap<OcKey> map = mixed_map(7);
-  const std::string ot = scratch("mixed.ot"), bt = scratch("mixed.bt");
+  const std::string ot = tree_file("mixed.ot"), bt = tree_file("mixed.bt");
   io::write_ot(ot, map);
   io::write_bt(bt, map);
   const auto back = io::read_octree(ot);
   CHECK(back.resolution() == 0.05);
   check_same_voxels(map, back);
-  CHECK(io::encode_ot(back) == slurp(ot));
+  CHECK(io::encode_ot(back) == read_file(ot));
 
   // .bt keeps occupancy only: every voxel comes back at the clamp bound of its class.
   const auto bin = io::read_octree(bt);
@@ -155,7 +146,7 @@ TEST_CASE("octomap_tree.round trips of a mixed map") {
     wrong += !w || *w != expect;
   });
   CHECK(wrong == 0);
-  CHECK(io::encode_bt(bin) == slurp(bt));
+  CHECK(io::encode_bt(bin) == read_file(bt));
 
   // Pruned nodes exist (uniform blocks): fewer nodes than voxels would need.
   const io::OctreeInfo info = io::inspect_octree(bt);
@@ -167,8 +158,8 @@ TEST_CASE("octomap_tree.empty map") {
   const OccupancyMap<OcKey> empty(0.1);
   const std::string bt = io::encode_bt(empty);
   CHECK(bt.find("size 0\nres 0.1\ndata\n") != std::string::npos);
-  const std::string path = scratch("empty.bt");
-  spit(path, bt);
+  const std::string path = tree_file("empty.bt");
+  write_file(path, bt);
   CHECK(io::read_octree(path).num_voxels() == 0);
 }
 
@@ -180,8 +171,8 @@ TEST_CASE("octomap_tree.malformed files throw io::Error naming the file") {
   auto expect_error = [&](const std::string& name, const std::string& bytes,
                           const std::string& needle, bool inspect_fails = true) {
     CAPTURE(name);
-    const std::string path = scratch(name);
-    spit(path, bytes);
+    const std::string path = tree_file(name);
+    write_file(path, bytes);
     try {
       (void)io::read_octree(path);
       FAIL("no error for " << name);
@@ -243,7 +234,7 @@ TEST_CASE("octomap_tree.max_voxels bounds the expansion of pruned leaves") {
         map.set(OcKey(static_cast<std::uint16_t>(32768 + x), static_cast<std::uint16_t>(32768 + y),
                       static_cast<std::uint16_t>(32768 + z)),
                 2.0f);
-  const std::string path = scratch("cube.bt");
+  const std::string path = tree_file("cube.bt");
   io::write_bt(path, map);
   const io::OctreeInfo info = io::inspect_octree(path);
   CHECK(info.min_leaf_depth == 12);  // one leaf of 16^3 voxels
@@ -314,7 +305,7 @@ TEST_CASE("octomap_tree.liboctomap writes the same bytes and reads ours (scan.da
   CHECK(bt == octomap_bytes(tree, true));
 
   // liboctomap reads our files and sees our leaves.
-  const std::string ot_path = scratch("scan_dat.ot"), bt_path = scratch("scan_dat.bt");
+  const std::string ot_path = tree_file("scan_dat.ot"), bt_path = tree_file("scan_dat.bt");
   io::write_ot(ot_path, map);
   io::write_bt(bt_path, map);
   {
@@ -354,7 +345,7 @@ TEST_CASE("octomap_tree.reads liboctomap's ColorOcTree and OcTreeStamped files")
     color.updateNode(p, i % 3 != 0);
     color.setNodeColor(color.coordToKey(p), 10, 20, 30);
   }
-  const std::string path = scratch("color.ot");
+  const std::string path = tree_file("color.ot");
   REQUIRE(color.write(path));
   const auto map = io::read_octree(path);
   std::size_t leaves = 0, wrong = 0;
@@ -370,7 +361,7 @@ TEST_CASE("octomap_tree.reads liboctomap's ColorOcTree and OcTreeStamped files")
 
   octomap::OcTreeStamped stamped(0.1);
   for (int i = 0; i < 300; ++i) stamped.updateNode(octomap::point3d(u(rng), u(rng), u(rng)), true);
-  const std::string spath = scratch("stamped.ot");
+  const std::string spath = tree_file("stamped.ot");
   REQUIRE(stamped.write(spath));
   CHECK(io::read_octree(spath).num_voxels() == stamped.getNumLeafNodes());
 }

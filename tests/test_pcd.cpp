@@ -20,23 +20,12 @@
 namespace io = knnocc::io;
 using knnocc::Point3f;
 
+using knnocc::test::append_le;
+using knnocc::test::write_file;
+
 namespace {
 
-std::string scratch(const std::string& name) {
-  return (knnocc::test::scratch_dir("pcd") / name).string();
-}
-
-void spit(const std::string& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
-
-template <class T>
-void put(std::string& s, T v) {  // little-endian on every host
-  char b[sizeof(T)];
-  io::detail::store_le(b, v);
-  s.append(b, sizeof(T));
-}
+std::string pcd_file(const std::string& name) { return knnocc::test::scratch_file("pcd", name); }
 
 std::string decode(const std::vector<unsigned char>& in, std::size_t n, std::string& problem) {
   std::string out(n, '\0');
@@ -50,10 +39,10 @@ bool same_point(const Point3f& a, const Point3f& b) {
   return eq(a.x, b.x) && eq(a.y, b.y) && eq(a.z, b.z);
 }
 
-void check_error(const std::string& name, const std::string& bytes, const std::string& needle) {
+void check_pcd_error(const std::string& name, const std::string& bytes, const std::string& needle) {
   CAPTURE(name);
-  const std::string path = scratch(name);
-  spit(path, bytes);
+  const std::string path = pcd_file(name);
+  write_file(path, bytes);
   knnocc::test::reset_largest_allocation();
   try {
     (void)io::read_pcd(path);
@@ -137,7 +126,7 @@ TEST_CASE("pcd.round trip in every format, with ids and NaN") {
     for (const bool with_ids : {false, true}) {
       CAPTURE(static_cast<int>(data));
       CAPTURE(with_ids);
-      const std::string path = scratch("round.pcd");
+      const std::string path = pcd_file("round.pcd");
       io::write_pcd(path, pts, with_ids ? &ids : nullptr, data);
       io::PcdInfo info;
       knnocc::test::reset_largest_allocation();
@@ -157,7 +146,7 @@ TEST_CASE("pcd.round trip in every format, with ids and NaN") {
       CHECK(io::read_points(path).points.size() == pts.size());
     }
   }
-  const std::string empty = scratch("empty.pcd");
+  const std::string empty = pcd_file("empty.pcd");
   for (const io::PcdData data :
        {io::PcdData::ascii, io::PcdData::binary, io::PcdData::binary_compressed}) {
     io::write_pcd(empty, {}, nullptr, data);
@@ -169,16 +158,16 @@ TEST_CASE("pcd.hand-built binary_compressed file with mixed fields") {
   // Two points; fields x (F4), rgb (U1 x3), y (F8), _ (2 bytes padding), z (F4), id (U2).
   // Stored field after field: x0 x1 | rgb0 rgb1 | y0 y1 | pad pad | z0 z1 | id0 id1.
   std::string raw;
-  put(raw, 1.5f);
-  put(raw, -2.25f);
+  append_le(raw, 1.5f);
+  append_le(raw, -2.25f);
   raw += "\x01\x02\x03\x04\x05\x06";
-  put(raw, 10.0);
-  put(raw, 1e300);  // narrows to +inf
+  append_le(raw, 10.0);
+  append_le(raw, 1e300);  // narrows to +inf
   raw += std::string(4, '\x7f');
-  put(raw, 0.0f);
-  put(raw, 3.0f);
-  put(raw, std::uint16_t{65535});
-  put(raw, std::uint16_t{9});
+  append_le(raw, 0.0f);
+  append_le(raw, 3.0f);
+  append_le(raw, std::uint16_t{65535});
+  append_le(raw, std::uint16_t{9});
   REQUIRE(raw.size() == 46);
   // LZF by hand: one literal run of 32 bytes, one of 16.
   std::string lzf;
@@ -190,11 +179,11 @@ TEST_CASE("pcd.hand-built binary_compressed file with mixed fields") {
       "VERSION .7\nFIELDS x rgb y _ z id\nSIZE 4 1 8 1 4 2\nTYPE F U F U F U\n"
       "COUNT 1 3 1 2 1 1\nWIDTH 1\nHEIGHT 2\nVIEWPOINT 1 2 3 0 1 0 0\nPOINTS 2\n"
       "DATA binary_compressed\n";
-  put(file, static_cast<std::uint32_t>(lzf.size()));
-  put(file, static_cast<std::uint32_t>(raw.size()));
+  append_le(file, static_cast<std::uint32_t>(lzf.size()));
+  append_le(file, static_cast<std::uint32_t>(raw.size()));
   file += lzf;
-  const std::string path = scratch("mixed.pcd");
-  spit(path, file);
+  const std::string path = pcd_file("mixed.pcd");
+  write_file(path, file);
   io::PcdInfo info;
   const io::Cloud c = io::read_pcd(path, &info);
   REQUIRE(c.points.size() == 2);
@@ -218,7 +207,7 @@ TEST_CASE("pcd.hand-built binary_compressed file with mixed fields") {
     bin += raw.substr(34 + 4 * i, 4);
     bin += raw.substr(42 + 2 * i, 2);
   }
-  spit(path, bin);
+  write_file(path, bin);
   const io::Cloud b = io::read_pcd(path);
   REQUIRE(b.points.size() == 2);
   CHECK(same_point(b.points[0], c.points[0]));
@@ -227,15 +216,15 @@ TEST_CASE("pcd.hand-built binary_compressed file with mixed fields") {
 }
 
 TEST_CASE("pcd.ascii with extra fields, counts and an organised cloud") {
-  const std::string path = scratch("ascii.pcd");
-  spit(path,
-       "# comment\nFIELDS normal_x x y z rgb curvature\nSIZE 4 4 4 8 4 4\nTYPE F F F F F F\n"
-       "COUNT 3 1 1 1 1 1\nWIDTH 2\nHEIGHT 2\nPOINTS 4\nDATA ascii\n"
-       "0 0 1 1.5 2.5 3.5 4.2e6 0.1\n"
-       "0 0 1 nan nan nan 0 0\r\n"
-       "\n"
-       "9 9 9 -1 -2 -3 0 0\n"
-       "1 1 1 7 8 9 0 0");
+  const std::string path = pcd_file("ascii.pcd");
+  write_file(path,
+             "# comment\nFIELDS normal_x x y z rgb curvature\nSIZE 4 4 4 8 4 4\nTYPE F F F F F F\n"
+             "COUNT 3 1 1 1 1 1\nWIDTH 2\nHEIGHT 2\nPOINTS 4\nDATA ascii\n"
+             "0 0 1 1.5 2.5 3.5 4.2e6 0.1\n"
+             "0 0 1 nan nan nan 0 0\r\n"
+             "\n"
+             "9 9 9 -1 -2 -3 0 0\n"
+             "1 1 1 7 8 9 0 0");
   const io::Cloud c = io::read_pcd(path);
   REQUIRE(c.points.size() == 4);
   CHECK(same_point(c.points[0], {1.5f, 2.5f, 3.5f}));
@@ -248,65 +237,71 @@ TEST_CASE("pcd.ascii with extra fields, counts and an organised cloud") {
 TEST_CASE("pcd.malformed files throw io::Error naming the file, without huge allocations") {
   const std::string ok_ascii =
       kXyzHeader + "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n1 2 3\n4 5 6\n";
-  check_error("notpcd.pcd", "ply\nformat ascii 1.0\n", "not a PCD file");
-  check_error("empty.pcd", "", "empty file");
-  check_error("nodata.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\n", "no DATA line");
-  check_error("baddata.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA binary_lz4\n",
-              "unknown DATA type");
-  check_error("nofields.pcd", "VERSION 0.7\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n",
-              "no FIELDS line");
-  check_error("sizes.pcd",
-              "FIELDS x y z\nSIZE 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n",
-              "SIZE has 2");
-  check_error("counts.pcd",
-              "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1\nWIDTH 1\nHEIGHT 1\nDATA ascii\n",
-              "COUNT has 2");
-  check_error("type.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F D\nWIDTH 1\nHEIGHT 1\nDATA ascii\n",
-              "unknown TYPE 'D'");
-  check_error("size3.pcd", "FIELDS x y z\nSIZE 4 4 3\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n",
-              "invalid SIZE '3'");
-  check_error("intx.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE I F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n",
-              "'x' must be a float scalar");
-  check_error("noz.pcd", "FIELDS x y\nSIZE 4 4\nTYPE F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2\n",
-              "no field 'z'");
-  check_error("points.pcd", kXyzHeader + "WIDTH 2\nHEIGHT 2\nPOINTS 3\nDATA ascii\n",
-              "!= POINTS 3");
-  check_error("negative.pcd", kXyzHeader + "WIDTH -2\nHEIGHT 1\nDATA ascii\n",
-              "non-negative integer");
-  check_error("fewlines.pcd",
-              kXyzHeader + "WIDTH 3\nHEIGHT 1\nPOINTS 3\nDATA ascii\n1.0 2.0 3.0\n4.0 5.0 6.0\n",
-              "POINTS 3 but 2 data lines");
-  check_error("manylines.pcd", ok_ascii + "7 8 9\n", "more data lines than POINTS");
-  check_error("tokens.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA ascii\n1.000 2.000\n",
-              "expected 3 values, found 2");
-  check_error("word.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA ascii\n1 two 3\n",
-              "line 10: cannot parse 'two'");
+  check_pcd_error("notpcd.pcd", "ply\nformat ascii 1.0\n", "not a PCD file");
+  check_pcd_error("empty.pcd", "", "empty file");
+  check_pcd_error("nodata.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\n", "no DATA line");
+  check_pcd_error("baddata.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA binary_lz4\n",
+                  "unknown DATA type");
+  check_pcd_error("nofields.pcd", "VERSION 0.7\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n",
+                  "no FIELDS line");
+  check_pcd_error("sizes.pcd",
+                  "FIELDS x y z\nSIZE 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n",
+                  "SIZE has 2");
+  check_pcd_error(
+      "counts.pcd",
+      "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1\nWIDTH 1\nHEIGHT 1\nDATA ascii\n",
+      "COUNT has 2");
+  check_pcd_error("type.pcd",
+                  "FIELDS x y z\nSIZE 4 4 4\nTYPE F F D\nWIDTH 1\nHEIGHT 1\nDATA ascii\n",
+                  "unknown TYPE 'D'");
+  check_pcd_error("size3.pcd",
+                  "FIELDS x y z\nSIZE 4 4 3\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n",
+                  "invalid SIZE '3'");
+  check_pcd_error("intx.pcd",
+                  "FIELDS x y z\nSIZE 4 4 4\nTYPE I F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n",
+                  "'x' must be a float scalar");
+  check_pcd_error("noz.pcd", "FIELDS x y\nSIZE 4 4\nTYPE F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2\n",
+                  "no field 'z'");
+  check_pcd_error("points.pcd", kXyzHeader + "WIDTH 2\nHEIGHT 2\nPOINTS 3\nDATA ascii\n",
+                  "!= POINTS 3");
+  check_pcd_error("negative.pcd", kXyzHeader + "WIDTH -2\nHEIGHT 1\nDATA ascii\n",
+                  "non-negative integer");
+  check_pcd_error(
+      "fewlines.pcd",
+      kXyzHeader + "WIDTH 3\nHEIGHT 1\nPOINTS 3\nDATA ascii\n1.0 2.0 3.0\n4.0 5.0 6.0\n",
+      "POINTS 3 but 2 data lines");
+  check_pcd_error("manylines.pcd", ok_ascii + "7 8 9\n", "more data lines than POINTS");
+  check_pcd_error("tokens.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA ascii\n1.000 2.000\n",
+                  "expected 3 values, found 2");
+  check_pcd_error("word.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA ascii\n1 two 3\n",
+                  "line 10: cannot parse 'two'");
   // Absurd sizes behind tiny files: never believed.
-  check_error("huge_ascii.pcd", kXyzHeader + "WIDTH 4000000000\nHEIGHT 1000\nDATA ascii\n1 2 3\n",
-              "file truncated");
+  check_pcd_error("huge_ascii.pcd",
+                  kXyzHeader + "WIDTH 4000000000\nHEIGHT 1000\nDATA ascii\n1 2 3\n",
+                  "file truncated");
   std::string bin = kXyzHeader + "WIDTH 1000000000\nHEIGHT 1\nDATA binary\n";
   bin.append(30, '\0');
-  check_error("huge_binary.pcd", bin, "file truncated: POINTS 1000000000");
+  check_pcd_error("huge_binary.pcd", bin, "file truncated: POINTS 1000000000");
   std::string comp = kXyzHeader + "WIDTH 300000000\nHEIGHT 1\nDATA binary_compressed\n";
-  put(comp, std::uint32_t{2});
-  put(comp, std::uint32_t{3600000000u});
+  append_le(comp, std::uint32_t{2});
+  append_le(comp, std::uint32_t{3600000000u});
   comp += std::string("\x00\x01", 2);
-  check_error("huge_compressed.pcd", comp, "cannot hold the declared 3600000000 bytes");
+  check_pcd_error("huge_compressed.pcd", comp, "cannot hold the declared 3600000000 bytes");
   std::string lying = kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA binary_compressed\n";
-  put(lying, std::uint32_t{1000});
-  put(lying, std::uint32_t{12});
+  append_le(lying, std::uint32_t{1000});
+  append_le(lying, std::uint32_t{12});
   lying += "abc";
-  check_error("short_compressed.pcd", lying, "compressed block of 1000 bytes");
+  check_pcd_error("short_compressed.pcd", lying, "compressed block of 1000 bytes");
   std::string mismatch = kXyzHeader + "WIDTH 2\nHEIGHT 1\nDATA binary_compressed\n";
-  put(mismatch, std::uint32_t{1});
-  put(mismatch, std::uint32_t{12});
+  append_le(mismatch, std::uint32_t{1});
+  append_le(mismatch, std::uint32_t{12});
   mismatch += '\0';
-  check_error("mismatch.pcd", mismatch, "POINTS 2 x 12 bytes per point differ");
+  check_pcd_error("mismatch.pcd", mismatch, "POINTS 2 x 12 bytes per point differ");
   std::string corrupt = kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA binary_compressed\n";
-  put(corrupt, std::uint32_t{3});
-  put(corrupt, std::uint32_t{12});
+  append_le(corrupt, std::uint32_t{3});
+  append_le(corrupt, std::uint32_t{12});
   corrupt += std::string("\x00\x41\x20", 3);  // "A", then a reference 2 bytes back
-  check_error("corrupt.pcd", corrupt, "corrupt binary_compressed data");
-  check_error("nosizes.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA binary_compressed\nab",
-              "no compressed-data sizes");
+  check_pcd_error("corrupt.pcd", corrupt, "corrupt binary_compressed data");
+  check_pcd_error("nosizes.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA binary_compressed\nab",
+                  "no compressed-data sizes");
 }

@@ -30,28 +30,14 @@ namespace io = knnocc::io;
 namespace fs = std::filesystem;
 using knnocc::Point3f;
 
+using knnocc::test::append_le;
+using knnocc::test::read_file;
+using knnocc::test::write_file;
+
 namespace {
 
-fs::path scratch(const std::string& name) {
-  const fs::path p = knnocc::test::scratch_dir("scan_sources") / name;
-  return p;
-}
-
-void spit(const fs::path& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
-
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-template <class T>
-void put(std::string& s, T v) {
-  char b[sizeof(T)];
-  io::detail::store_le(b, v);
-  s.append(b, sizeof(T));
+fs::path sources_file(const std::string& name) {
+  return knnocc::test::scratch_dir("scan_sources") / name;
 }
 
 io::Pose make_pose(double x, double y, double z, double angle, Eigen::Vector3d axis) {
@@ -83,10 +69,11 @@ io::ScanGraph sample_graph() {
   return g;
 }
 
-void check_error(const std::string& name, const std::string& bytes, const std::string& needle) {
+void check_graph_error(const std::string& name, const std::string& bytes,
+                       const std::string& needle) {
   CAPTURE(name);
-  const fs::path path = scratch(name);
-  spit(path, bytes);
+  const fs::path path = sources_file(name);
+  write_file(path, bytes);
   knnocc::test::reset_largest_allocation();
   try {
     (void)io::read_scan_graph(path.string());
@@ -103,7 +90,7 @@ void check_error(const std::string& name, const std::string& bytes, const std::s
 
 TEST_CASE("scan_graph.round trip") {
   const io::ScanGraph g = sample_graph();
-  const std::string path = scratch("sample.graph").string();
+  const std::string path = sources_file("sample.graph").string();
   io::write_scan_graph(path, g);
   const io::ScanGraph back = io::read_scan_graph(path);
   REQUIRE(back.nodes.size() == 3);
@@ -121,48 +108,48 @@ TEST_CASE("scan_graph.round trip") {
   CHECK(back.edges[0].second == 11);
   CHECK(back.edges[0].weight == 0.25);
   // Written again: the same bytes.
-  const std::string again = scratch("again.graph").string();
+  const std::string again = sources_file("again.graph").string();
   io::write_scan_graph(again, back);
-  CHECK(slurp(again) == slurp(path));
+  CHECK(read_file(again) == read_file(path));
 }
 
 TEST_CASE("scan_graph.malformed files") {
-  const std::string path = scratch("good.graph").string();
+  const std::string path = sources_file("good.graph").string();
   io::write_scan_graph(path, sample_graph());
-  const std::string good = slurp(path);
-  check_error("empty.graph", "", "truncated while reading node count");
-  check_error("truncated.graph", good.substr(0, good.size() - 100), "truncated");
-  check_error("trailing.graph", good + "x", "unexpected bytes");
+  const std::string good = read_file(path);
+  check_graph_error("empty.graph", "", "truncated while reading node count");
+  check_graph_error("truncated.graph", good.substr(0, good.size() - 100), "truncated");
+  check_graph_error("trailing.graph", good + "x", "unexpected bytes");
   std::string huge;
-  put(huge, std::uint32_t{4000000000u});
+  append_le(huge, std::uint32_t{4000000000u});
   huge.append(200, '\0');
-  check_error("huge_nodes.graph", huge, "node count is 4000000000");
+  check_graph_error("huge_nodes.graph", huge, "node count is 4000000000");
   std::string points;
-  put(points, std::uint32_t{1});
-  put(points, std::uint32_t{3000000000u});
+  append_le(points, std::uint32_t{1});
+  append_le(points, std::uint32_t{3000000000u});
   points.append(100, '\0');
-  check_error("huge_points.graph", points, "point count is 3000000000");
+  check_graph_error("huge_points.graph", points, "point count is 3000000000");
   std::string marker = good;
   marker[8] = 4;  // first point's "3"
-  check_error("marker.graph", marker, "size marker 4 instead of 3");
+  check_graph_error("marker.graph", marker, "size marker 4 instead of 3");
   // Node 0's pose: after 4 + 4 + 100 * 28 bytes; translation marker, 3 doubles, rotation marker.
   const std::size_t pose0 = 8 + 100 * 28;
   std::string nan_pose = good;
   const double nan = std::nan("");
   std::memcpy(&nan_pose[pose0 + 4], &nan, 8);
-  check_error("nan_pose.graph", nan_pose, "node 0: non-finite pose value");
+  check_graph_error("nan_pose.graph", nan_pose, "node 0: non-finite pose value");
   std::string bad_q = good;
   const double two = 2.0;
   std::memcpy(&bad_q[pose0 + 32], &two, 8);
-  check_error("bad_quaternion.graph", bad_q, "quaternion norm");
+  check_graph_error("bad_quaternion.graph", bad_q, "quaternion norm");
   io::ScanGraph dup = sample_graph();
   dup.nodes[2].id = dup.nodes[0].id;
   io::write_scan_graph(path, dup);
-  check_error("dup.graph", slurp(path), "two nodes have the id 1");
+  check_graph_error("dup.graph", read_file(path), "two nodes have the id 1");
   io::ScanGraph dangling = sample_graph();
   dangling.edges[0].second = 99;
   io::write_scan_graph(path, dangling);
-  check_error("dangling.graph", slurp(path), "edge 0 refers to unknown node id 99");
+  check_graph_error("dangling.graph", read_file(path), "edge 0 refers to unknown node id 99");
 }
 
 #if KNNOCC_HAVE_OCTOMAP
@@ -178,7 +165,7 @@ TEST_CASE("scan_graph.liboctomap reads ours and we read liboctomap's") {
     nodes.push_back(theirs.addNode(pc, octomap::pose6d(i, -i, 0.5 * i, 0.1 * i, 0.2, -0.3 * i)));
   }
   theirs.addEdge(nodes[0], nodes[3], octomap::pose6d(1, 2, 3, 0, 0, 0.5));
-  const std::string path = scratch("octomap.graph").string();
+  const std::string path = sources_file("octomap.graph").string();
   REQUIRE(theirs.writeBinary(path));
   const io::ScanGraph ours = io::read_scan_graph(path);
   REQUIRE(ours.nodes.size() == 4);
@@ -202,7 +189,7 @@ TEST_CASE("scan_graph.liboctomap reads ours and we read liboctomap's") {
   CHECK(ours.edges[0].second == nodes[3]->id);
 
   // us -> liboctomap
-  const std::string mine = scratch("ours.graph").string();
+  const std::string mine = sources_file("ours.graph").string();
   io::write_scan_graph(mine, sample_graph());
   octomap::ScanGraph read;
   REQUIRE(read.readBinary(mine));
@@ -222,42 +209,42 @@ TEST_CASE("scan_graph.liboctomap reads ours and we read liboctomap's") {
 
 TEST_CASE("kitti.velodyne bin, calib and poses") {
   const std::vector<Point3f> pts = {{1.5f, -2.f, 0.25f}, {100.f, 0.f, -3.f}};
-  const std::string bin = scratch("000000.bin").string();
+  const std::string bin = sources_file("000000.bin").string();
   io::write_kitti_bin(bin, pts);
   CHECK(fs::file_size(bin) == 32);
   const io::Cloud c = io::read_points(bin);
   REQUIRE(c.points.size() == 2);
   CHECK(c.points[1].x == 100.f);
   CHECK(c.points[0].z == 0.25f);
-  spit(bin, std::string(33, '\0'));
+  write_file(bin, std::string(33, '\0'));
   CHECK_THROWS_WITH_AS(io::read_kitti_bin(bin), doctest::Contains("not a multiple of 16"),
                        io::Error);
 
-  const std::string calib = scratch("calib.txt").string();
-  spit(calib, "P0: 1 0 0 0 0 1 0 0 0 0 1 0\nTr: 0 -1 0 0.1 0 0 -1 0.2 1 0 0 0.3\n");
+  const std::string calib = sources_file("calib.txt").string();
+  write_file(calib, "P0: 1 0 0 0 0 1 0 0 0 0 1 0\nTr: 0 -1 0 0.1 0 0 -1 0.2 1 0 0 0.3\n");
   const Eigen::Isometry3d tr = io::read_kitti_calib_tr(calib);
   CHECK((tr * Eigen::Vector3d(1, 0, 0) - Eigen::Vector3d(0.1, 0.2, 1.3)).norm() < 1e-12);
-  spit(calib, "P0: 1 0 0 0 0 1 0 0 0 0 1 0\n");
+  write_file(calib, "P0: 1 0 0 0 0 1 0 0 0 0 1 0\n");
   CHECK_THROWS_WITH_AS(io::read_kitti_calib_tr(calib), doctest::Contains("no 'Tr:' line"),
                        io::Error);
-  spit(calib, "Tr: 2 0 0 0 0 1 0 0 0 0 1 0\n");
+  write_file(calib, "Tr: 2 0 0 0 0 1 0 0 0 0 1 0\n");
   CHECK_THROWS_WITH_AS(io::read_kitti_calib_tr(calib), doctest::Contains("not a rotation"),
                        io::Error);
 
-  const std::string poses = scratch("kitti_poses.txt").string();
-  spit(poses,
-       "1.000000e+00 0.000000e+00 0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 "
-       "0.000000e+00 0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00\n"
-       "0 -1 0 5 1 0 0 6 0 0 1 7\n");
+  const std::string poses = sources_file("kitti_poses.txt").string();
+  write_file(poses,
+             "1.000000e+00 0.000000e+00 0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 "
+             "0.000000e+00 0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00\n"
+             "0 -1 0 5 1 0 0 6 0 0 1 7\n");
   const auto p = io::read_trajectory(poses);
   REQUIRE(p.size() == 2);
   CHECK(p[1].stamp == 1.0);
   CHECK(p[1].t == Eigen::Vector3d(5, 6, 7));
   CHECK((p[1].q * Eigen::Vector3d(1, 0, 0) - Eigen::Vector3d(0, 1, 0)).norm() < 1e-12);
-  spit(poses, "1 0 0 0 0 1 0 0 0 0 1\n");
+  write_file(poses, "1 0 0 0 0 1 0 0 0 0 1\n");
   CHECK_THROWS_WITH_AS(io::read_kitti_poses(poses), doctest::Contains("expected 12 numbers"),
                        io::Error);
-  spit(poses, "1 0 0 0 0 1 0 0 0 0 -1 0\n");  // a reflection
+  write_file(poses, "1 0 0 0 0 1 0 0 0 0 -1 0\n");  // a reflection
   CHECK_THROWS_WITH_AS(io::read_trajectory(poses), doctest::Contains("line 1: the 3x3 part"),
                        io::Error);
 }
@@ -269,7 +256,8 @@ TEST_CASE("trajectory.TUM and KITTI written and read back") {
     p.stamp = 1305031102.175304 + i;
     poses.push_back(p);
   }
-  const std::string tum = scratch("tum.txt").string(), kitti = scratch("kitti.txt").string();
+  const std::string tum = sources_file("tum.txt").string(),
+                    kitti = sources_file("kitti.txt").string();
   io::write_tum_poses(tum, poses);
   io::write_kitti_poses(kitti, poses);
   const auto a = io::read_trajectory(tum), b = io::read_trajectory(kitti);
@@ -286,14 +274,15 @@ TEST_CASE("trajectory.TUM and KITTI written and read back") {
 }
 
 TEST_CASE("sequence folders with .pcd and KITTI velodyne clouds; ScanSource") {
-  const fs::path root = scratch("seq_pcd");
+  const fs::path root = sources_file("seq_pcd");
   fs::remove_all(root);
   fs::create_directories(root / "clouds");
-  spit(root / "poses.txt", "0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n");
+  write_file(root / "poses.txt", "0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n");
   io::write_pcd((root / "clouds" / "000000.pcd").string(), {{1, 2, 3}}, nullptr,
                 io::PcdData::binary_compressed);
   io::write_ply((root / "clouds" / "000001.ply").string(), {{4, 5, 6}, {7, 8, 9}});
-  spit(root / "calib.txt", "fx 525 fy 525\n");  // not KITTI's: only velodyne/ folders use it
+  write_file(root / "calib.txt",
+             "fx 525 fy 525\n");  // not KITTI's: only velodyne/ folders use it
   const io::ScanSource src = io::ScanSource::open(root.string());
   CHECK(std::string(src.kind()) == "sequence folder");
   REQUIRE(src.size() == 2);
@@ -302,13 +291,13 @@ TEST_CASE("sequence folders with .pcd and KITTI velodyne clouds; ScanSource") {
   CHECK(src.load(1).pose.t.x() == 1.0);
 
   // KITTI layout: velodyne/*.bin, KITTI poses, calib.txt's Tr applied to every pose.
-  const fs::path kitti = scratch("kitti_seq");
+  const fs::path kitti = sources_file("kitti_seq");
   fs::remove_all(kitti);
   fs::create_directories(kitti / "velodyne");
   io::write_kitti_bin((kitti / "velodyne" / "000000.bin").string(), {{1, 0, 0}});
   io::write_kitti_bin((kitti / "velodyne" / "000001.bin").string(), {{1, 0, 0}});
-  spit(kitti / "poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n0 -1 0 5 1 0 0 6 0 0 1 7\n");
-  spit(kitti / "calib.txt", "Tr: 0 -1 0 0.1 0 0 -1 0.2 1 0 0 0.3\n");
+  write_file(kitti / "poses.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n0 -1 0 5 1 0 0 6 0 0 1 7\n");
+  write_file(kitti / "calib.txt", "Tr: 0 -1 0 0.1 0 0 -1 0.2 1 0 0 0.3\n");
   CHECK(io::is_sequence_dir(kitti.string()));
   const io::ScanSource ks = io::ScanSource::open(kitti.string());
   REQUIRE(ks.size() == 2);
@@ -321,10 +310,10 @@ TEST_CASE("sequence folders with .pcd and KITTI velodyne clouds; ScanSource") {
   CHECK(world[0].z == doctest::Approx(7 + 1.3));
 
   // A single PCD file: its VIEWPOINT is the sensor pose.
-  const fs::path pcd = scratch("viewpoint.pcd");
-  spit(pcd,
-       "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\n"
-       "VIEWPOINT 10 20 30 0.7071067811865476 0 0 0.7071067811865476\nDATA ascii\n1 0 0\n");
+  const fs::path pcd = sources_file("viewpoint.pcd");
+  write_file(pcd,
+             "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\n"
+             "VIEWPOINT 10 20 30 0.7071067811865476 0 0 0.7071067811865476\nDATA ascii\n1 0 0\n");
   const io::ScanSource one = io::ScanSource::open(pcd.string());
   CHECK(std::string(one.kind()) == "point file");
   const io::Scan s = one.load(0);
@@ -333,7 +322,7 @@ TEST_CASE("sequence folders with .pcd and KITTI velodyne clouds; ScanSource") {
   CHECK(io::is_identity(io::ScanSource::open(root.string()).load(0).pose));
 
   // A .graph file.
-  const std::string graph = scratch("src.graph").string();
+  const std::string graph = sources_file("src.graph").string();
   io::write_scan_graph(graph, sample_graph());
   const io::ScanSource gs = io::ScanSource::open(graph);
   CHECK(std::string(gs.kind()) == "scan graph");
@@ -341,6 +330,6 @@ TEST_CASE("sequence folders with .pcd and KITTI velodyne clouds; ScanSource") {
   CHECK(gs.load(2).cloud.points.size() == 102);
   CHECK_THROWS_AS(gs.load(3), io::Error);
 
-  CHECK_THROWS_WITH_AS(io::ScanSource::open(scratch("").string()),
+  CHECK_THROWS_WITH_AS(io::ScanSource::open(sources_file("").string()),
                        doctest::Contains("not a sequence folder"), io::Error);
 }

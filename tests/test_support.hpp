@@ -1,15 +1,20 @@
 #pragma once
-// Shared helpers for the test suite: locating the real datasets (skipped when absent) and a
-// deterministic random generator.
+// Shared helpers for the test suite: locating the real datasets (skipped when absent), scratch
+// files, byte strings, voxel values and a deterministic random generator. One definition each:
+// the sanitizer build compiles the test sources in unity batches, where file-local twins clash.
 
 #include <doctest/doctest.h>
 
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
 #include <random>
 #include <string>
 #include <vector>
 
+#include <knnocc/io/detail/bytes.hpp>
 #include <knnocc/io/xyz.hpp>
 
 namespace knnocc::test {
@@ -62,6 +67,45 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
   std::filesystem::create_directories(p);
   return p;
 }
+
+/// A file named `name` in scratch_dir(folder).
+inline std::string scratch_file(const std::string& folder, const std::string& name) {
+  return (scratch_dir(folder) / name).string();
+}
+
+/// The whole file as bytes ("" when it cannot be opened).
+inline std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+/// Writes bytes to path, replacing the file.
+inline void write_file(const std::filesystem::path& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+/// Appends v to s little-endian, on every host.
+template <class T>
+void append_le(std::string& s, T v) {
+  char b[sizeof(T)];
+  io::detail::store_le(b, v);
+  s.append(b, sizeof(T));
+}
+
+/// Every known voxel of an OccupancyMap: packed key -> log-odds, ordered.
+template <class Map>
+std::map<std::uint64_t, float> voxel_values(const Map& map) {
+  std::map<std::uint64_t, float> out;
+  map.for_each_voxel([&](const auto& k, float v) { out[k.pack()] = v; });
+  return out;
+}
+
+/// A sensor origin and the end points of its rays (world frame).
+struct Scan {
+  Point3f origin;
+  std::vector<Point3f> points;
+};
 
 using Rng = std::mt19937_64;
 

@@ -5,8 +5,8 @@
 # no-exceptions smoke test and the libFuzzer harnesses (tests/fuzz, FUZZ_SECONDS each) run there.
 # Any report is fatal (-fno-sanitize-recover=all).
 # Kept within CI's budget: line tables only (file:line in reports, no variable info) and a unity
-# build (the test sources compiled as two units, so the headers' templates are instrumented twice
-# instead of once per test file): 8.6 -> 5.7 min of building on 2 cores. Fuzzing 15 s per
+# build (the test sources compiled in batches of 13, so the headers' templates are instrumented
+# once per batch instead of once per test file): 8.6 -> 5.7 min of building on 2 cores. Fuzzing 15 s per
 # harness is a smoke run; fuzz longer by hand (tests/fuzz/CMakeLists.txt, KNNOCC_FUZZ_SECONDS).
 #   -DCXX=<clang++> -DROOT=<project root> -DWORK_DIR=<build dir> [-DFUZZ_SECONDS=<s>]
 if(NOT FUZZ_SECONDS)

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 
+#include "../core/config.hpp"
 #include "../core/grid.hpp"
 #include "../core/point3.hpp"
 

@@ -8,11 +8,15 @@
 // The scalar walk spends most of its time on one branch: which axis steps next, a coin flip for
 // the CPU's predictor. On x86-64 CPUs with AVX2 (checked at run time) four rays walk at once, one
 // per 64-bit lane, with walk_ray()'s comparisons in branch-free form: the same comparisons on the
-// same doubles, so exactly the same voxels; CPUs with AVX-512F walk eight rays at once the same
-// way (KNNOCC_NO_AVX512 keeps them on four lanes). A lane whose ray ends takes the next ray of
-// the stream; when the stream runs dry the remaining rays finish on the scalar walk. The four-lane
-// walk tests for ends only in the steps where a lane can end (unchecked_steps): most steps are
-// plain steps. The set-up of the rays (setup_walk) goes eight at a time as well.
+// same doubles, so exactly the same voxels; CPUs with AVX-512F walk eight rays at once with the
+// same comparisons (KNNOCC_NO_AVX512 keeps them on four lanes). A lane whose ray ends takes the
+// next ray of the stream; when the stream runs dry the remaining rays finish on the scalar walk.
+// The four-lane walk tests for ends only in the steps where a lane can end (unchecked_steps):
+// most steps are plain steps; the eight-lane walk still tests at every step. The set-up of the
+// rays (setup_walk) goes eight at a time on AVX2 CPUs.
+// Precondition of the vector paths: a box of fewer than 2^16 + 64 voxels per edge (ScanInserter's
+// kDenseMaxEdge), which bounds both a ray's rounding error (unchecked_steps) and the bit indices
+// converted through doubles in the set-up.
 // Elsewhere (no AVX2, other architectures, or KNNOCC_NO_SIMD defined) everything runs on the
 // scalar code, with the same results.
 
@@ -22,6 +26,7 @@
 #include <cstdlib>
 #include <limits>
 
+#include "../core/config.hpp"
 #include "../raycast/dda.hpp"
 
 #if !defined(KNNOCC_NO_SIMD) && (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__)
@@ -425,8 +430,9 @@ KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* 
 // The same walk on eight rays, one per lane of a 512-bit register, with walk_ray()'s comparisons
 // as mask registers (compare into a mask, add under the mask): the same operations on the same
 // doubles as the four-lane walk, so again exactly walk_ray()'s voxels. Chosen at run time where
-// the CPU has AVX-512F: 0.91 against 1.14 ns per voxel for four lanes, on 108-voxel rays in an
-// L2-sized box (AMD EPYC of the project's machine). Packets of eight rays walking in lock step
+// the CPU has AVX-512F: 0.91 against 1.14 ns per voxel for the four-lane walk of the time (before
+// its unchecked steps), on 108-voxel rays in an L2-sized box, measured on an AMD EPYC with
+// AVX-512 (bench_walk); not measured again since. Packets of eight rays walking in lock step
 // (no per-ray refill) were measured too: slower, lanes idle while the longest ray finishes.
 
 #define KNNOCC_TARGET_AVX512 __attribute__((target("avx512f,avx2,bmi2")))
@@ -486,7 +492,7 @@ KNNOCC_TARGET_AVX512 inline LinearRay get_lane8(const RayLanes8& v, int l,
       i[1][l]};
 }
 
-// step_lanes() on eight lanes; returns the lanes that may have ended.
+// step_lanes() on eight lanes; returns the lanes that ended.
 KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE unsigned step_lanes8(RayLanes8& v, __m512d& tmin) {
   const __mmask8 lt01 = _mm512_cmp_pd_mask(v.t0, v.t1, _CMP_LT_OQ);
   const __mmask8 lt02 = _mm512_cmp_pd_mask(v.t0, v.t2, _CMP_LT_OQ);

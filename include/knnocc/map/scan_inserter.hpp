@@ -86,9 +86,9 @@ struct ScanStats {
   std::size_t free_voxels = 0;       ///< voxels that received the miss update
   bool origin_valid = true;          ///< false: origin NaN/Inf, nothing was inserted
   /// Pieces the points were collected and walked in (0: the origin was not finite). A scan of more
-  /// than 4096 points in a random-access container (not discretized, not rated) whose dense box
-  /// fits goes 4096 points at a time, which bounds the per-point buffers; the map gets the same
-  /// updates either way.
+  /// than ScanInserter::chunk_points (4096) points in a random-access container (not discretized,
+  /// not rated) whose dense box fits goes that many points at a time, which bounds the per-point
+  /// buffers; the map gets the same updates either way.
   std::size_t chunks = 0;
 };
 
@@ -443,14 +443,10 @@ class ScanInserter {
   // Points [first, first + n) into the Parts: equal shares per thread (one thread for few points).
   template <class It>
   void collect_range(It first, std::size_t n, double max_range, const EndpointRating* ratings) {
-    // Threads only for scans large enough to pay for waking them.
-    const unsigned parts = n >= 8192 ? threads_ : 1;
+    const unsigned parts = n >= kThreadedPoints ? threads_ : 1;
     auto job = [&](unsigned w) {
       if (w >= parts) return;
-      Part& part = workers_[w]->part;
       const std::size_t a = n * w / parts, b = n * (w + 1) / parts;
-      part.rays.reserve(b - a);  // one allocation, not a doubling series
-      part.hits.reserve(b - a);
       collector(w, max_range)
           .add_points(first + static_cast<std::ptrdiff_t>(a),
                       first + static_cast<std::ptrdiff_t>(b), ratings ? ratings + a : nullptr);
@@ -491,7 +487,7 @@ class ScanInserter {
   //
   // The per-point buffers (rays and hits, 32 bytes a point) would outweigh a small map, so a large
   // scan whose dense box is known in advance goes through collect and walk a chunk of points at a
-  // time, into the same bitmaps, and is applied once at the end: the same voxels, each updated
+  // time, into the threads' bitmaps, and is applied once at the end: the same voxels, each updated
   // once, as in one piece. The box comes from the points' coordinate bounds, clipped to max_range
   // around the origin (keys are monotonic in coordinates; a ray truncated at max_range ends
   // between origin and point, within max_range of the origin), grown by a voxel for rounding.
@@ -541,7 +537,7 @@ class ScanInserter {
     if (!origin_in_range_) return false;
     // The points' bounds (and a sample of the rays' lengths in voxels for dense_fits, which only
     // picks the faster path), each thread over its share of the points.
-    const unsigned parts = n >= 2 * chunk_points ? threads_ : 1;
+    const unsigned parts = n >= kThreadedPoints ? threads_ : 1;
     auto bound = [&](unsigned w) {
       if (w < parts)
         workers_[w]->bounds = point_bounds(first, n * w / parts, n * (w + 1) / parts, max_range);
@@ -666,6 +662,8 @@ class ScanInserter {
   // of a whole voxel in t, while the float direction and length err by about 1e-6 of the ray
   // length, under 0.2 voxel for the rays of a box edge below 2^16 voxels + 64.
   static constexpr std::int64_t kDenseMaxEdge = (std::int64_t{1} << 16) + 64;
+  // Scans of fewer points are collected (and bounded) on one thread: waking the others costs more.
+  static constexpr std::size_t kThreadedPoints = 2 * chunk_points;
 
   // Chooses the dense path and shapes its box: the key box grown by one voxel, brick aligned.
   bool dense_fits() {
@@ -700,8 +698,9 @@ class ScanInserter {
     }
   }
   detail::RayFan dense_fan() const {
+    const detail::ScanBitmap& bitmap = workers_[0]->miss;  // every thread's bitmaps alike
     return detail::RayFan(map_->grid(), origin_, origin_key_, box_lo_,
-                          {1, box_size_[0], box_size_[0] * box_size_[1]});
+                          {bitmap.stride(0), bitmap.stride(1), bitmap.stride(2)});
   }
 
   // The Parts' hits and rays into the bitmaps: each thread its own Part's hits, and rays from
@@ -729,7 +728,7 @@ class ScanInserter {
 
   // Walks the rays that more(pos, stop) hands out (a range at a time, false when there are no
   // more) into the worker's miss bitmap; returns the voxels visited. Rays are set up a batch at
-  // a time: independent set-ups (divisions, a square root) overlap in the CPU, and go four at a
+  // a time: independent set-ups (divisions, a square root) overlap in the CPU, and go eight at a
   // time on AVX2 machines.
   template <class More>
   std::size_t walk_dense_rays(Worker& worker, const detail::RayFan& fan, More&& more) {
@@ -739,7 +738,8 @@ class ScanInserter {
     const Ray *pos = nullptr, *stop = nullptr;
     auto next = [&](detail::LinearRay& r) {
       if (taken == have) {
-        if (pos == stop && !more(pos, stop)) return false;
+        while (pos == stop)  // an empty range just asks for the next one
+          if (!more(pos, stop)) return false;
         have = std::min(kBatch, static_cast<std::size_t>(stop - pos));
         detail::setup_linear_rays(map_->grid(), fan, pos, have, batch);
         pos += have;

@@ -11,7 +11,7 @@
 // The walk is split in two so that several walkers share OctoMap's arithmetic: setup_walk() (via
 // start_ray()) does the set-up, the one place with OctoMap's float/double rules, and walk_ray()
 // the stepping, with a cursor that decides what a voxel is (a Key here, a bit index or a brick
-// mask in ScanInserter). detail/ray_lanes.hpp holds the four-rays-at-once versions of both,
+// mask in ScanInserter). detail/ray_lanes.hpp holds the several-rays-at-once versions of both,
 // which repeat these operations in the same order (the tests compare them bit for bit). Each
 // axis moves monotonically, one voxel per step, so the walk can stand on the end voxel only after
 // exactly |end - origin|_1 steps: the end test is a countdown, not a key comparison per step.

@@ -10,6 +10,7 @@
 #include <set>
 #include <vector>
 
+#include <knnocc/detail/point_bounds.hpp>
 #include <knnocc/map/scan_inserter.hpp>
 
 #include "test_support.hpp"
@@ -193,8 +194,9 @@ TEST_CASE_TEMPLATE("insert.large_scans_in_chunks_match_one_piece", Key, OcKey, W
   // Scans of more than one chunk (ScanInserter collects and walks large scans 4096 points at a
   // time, applies them once): against the set-based oracle and against the one-piece path (a
   // std::list has no random access, so it is inserted in one piece). NaN/Inf points, points on
-  // voxel borders, points beyond max_range and in the origin's voxel; two scans with overlapping
-  // voxels, so an update applied twice in one scan would show.
+  // voxel borders, points beyond max_range and in the origin's voxel (NaN/Inf in the first scan
+  // only: the second takes the vectorised bounds); two scans with overlapping voxels, so an
+  // update applied twice in one scan would show.
   knnocc::test::Rng rng(41);
   std::uniform_real_distribution<float> u(-3.f, 3.f);
   std::uniform_int_distribution<int> cell(-30, 30);
@@ -211,8 +213,8 @@ TEST_CASE_TEMPLATE("insert.large_scans_in_chunks_match_one_piece", Key, OcKey, W
           Point3f p{u(rng), u(rng), u(rng) * 0.5f};
           if (i % 7 == 0)  // on voxel borders
             p = {0.1f * static_cast<float>(cell(rng)), 0.1f * static_cast<float>(cell(rng)), p.z};
-          if (i % 997 == 0) p.x = std::numeric_limits<float>::quiet_NaN();
-          if (i % 1999 == 0) p.y = std::numeric_limits<float>::infinity();
+          if (scan == 0 && i % 997 == 0) p.x = std::numeric_limits<float>::quiet_NaN();
+          if (scan == 0 && i % 1999 == 0) p.y = std::numeric_limits<float>::infinity();
           if (i % 1499 == 0) p = origin;
           pts.push_back(p);
         }
@@ -226,7 +228,7 @@ TEST_CASE_TEMPLATE("insert.large_scans_in_chunks_match_one_piece", Key, OcKey, W
         CHECK(sb.chunks == 1);
         CHECK(sa.points == sb.points);
         CHECK(sa.nonfinite == sb.nonfinite);
-        CHECK(sa.nonfinite > 0);
+        CHECK((sa.nonfinite > 0) == (scan == 0));  // the second scan: the all-finite bounds
         CHECK(sa.beyond_max_range == sb.beyond_max_range);
         CHECK(sa.ray_keys == sb.ray_keys);
         CHECK(sa.occupied_voxels == sb.occupied_voxels);
@@ -264,5 +266,50 @@ TEST_CASE("insert.large_scan_paths_with_far_and_out_of_range_points") {
     else
       CHECK(st.beyond_max_range == 0);
     CHECK(dump(map) == dump(oracle));
+  }
+}
+
+TEST_CASE("insert.finite_bounds_match_a_point_loop") {
+  // The vectorised bounds of a large scan's points against a plain loop: every length from 0 to
+  // 40 (whole blocks of eight and remainders), with and without a NaN or Inf at each position.
+  knnocc::test::Rng rng(43);
+  std::uniform_real_distribution<float> u(-50.f, 50.f);
+  const float bad[] = {std::numeric_limits<float>::quiet_NaN(),
+                       std::numeric_limits<float>::infinity(),
+                       -std::numeric_limits<float>::infinity()};
+  for (std::size_t n = 0; n <= 40; ++n) {
+    std::vector<Point3f> pts(n);
+    for (auto& p : pts) p = {u(rng), u(rng), u(rng)};
+    const float start_lo[3] = {1.f, 2.f, 3.f}, start_hi[3] = {4.f, 5.f, 6.f};
+    float lo[3], hi[3], want_lo[3], want_hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = want_lo[a] = start_lo[a];
+      hi[a] = want_hi[a] = start_hi[a];
+    }
+    for (const auto& p : pts)
+      for (int a = 0; a < 3; ++a) {
+        const float c = a == 0 ? p.x : a == 1 ? p.y : p.z;
+        want_lo[a] = std::min(want_lo[a], c);
+        want_hi[a] = std::max(want_hi[a], c);
+      }
+    CAPTURE(n);
+    REQUIRE(knnocc::detail::finite_bounds(pts.data(), n, lo, hi));
+    for (int a = 0; a < 3; ++a) {
+      CHECK(lo[a] == want_lo[a]);
+      CHECK(hi[a] == want_hi[a]);
+    }
+    for (std::size_t i = 0; i < n; ++i) {  // one bad coordinate anywhere: false, bounds untouched
+      auto spoiled = pts;
+      const int axis = static_cast<int>(i % 3);
+      (axis == 0 ? spoiled[i].x : axis == 1 ? spoiled[i].y : spoiled[i].z) = bad[i % 3];
+      float l[3] = {start_lo[0], start_lo[1], start_lo[2]};
+      float h[3] = {start_hi[0], start_hi[1], start_hi[2]};
+      CAPTURE(i);
+      CHECK_FALSE(knnocc::detail::finite_bounds(spoiled.data(), n, l, h));
+      for (int a = 0; a < 3; ++a) {
+        CHECK(l[a] == start_lo[a]);
+        CHECK(h[a] == start_hi[a]);
+      }
+    }
   }
 }

@@ -23,8 +23,9 @@
 //      Each thread takes chunks of rays into its own scratch; free and occupied are unions, so
 //      the result does not depend on which thread walked which ray.
 //      Large scans whose dense box is known in advance run 1 and 2 a chunk of points at a time
-//      (insert_chunked): each thread takes chunks in turn, collects them and walks their rays
-//      into its own scratch, all in one run of the threads; this bounds the per-point buffers.
+//      (insert_chunked): each thread takes chunks in turn, collects them (the hits straight into
+//      its hit bitmap) and walks their rays into its own scratch, all in one run of the threads;
+//      this bounds the per-point buffers.
 //   3. apply: the touched bricks with the thread scratches OR-ed, gathered in z, y, x brick order
 //      whatever the path or thread count; the missing map bricks created in that order (one
 //      thread), then every touched voxel updated exactly once, occupied first (each brick by one
@@ -58,6 +59,7 @@
 #include "../detail/flat_index.hpp"
 #include "../detail/huge_pages.hpp"
 #include "../detail/key_rounding.hpp"
+#include "../detail/point_bounds.hpp"
 #include "../detail/ray_lanes.hpp"
 #include "../detail/scan_bitmap.hpp"
 #include "../detail/thread_pool.hpp"
@@ -274,6 +276,8 @@ class ScanInserter {
     const double max_range;
     const detail::KeyRounding<Key> rounding;
     Part& part;
+    // add_chunk: the thread's hit bitmap, which takes the hits in place of part.hits.
+    detail::ScanBitmap* hit_map = nullptr;
 
     // What a loop over points counts, in registers while it runs (the Part's fields are stored
     // to after every point otherwise: the compiler cannot tell them from the buffers' contents).
@@ -292,7 +296,7 @@ class ScanInserter {
       return t;
     }
     void finish(const Tally& t) {
-      part.hits.set_end(t.hit);
+      if (t.hit) part.hits.set_end(t.hit);  // null: add_chunk, whose hits went to hit_map
       part.rays.set_end(t.ray);
       for (int a = 0; a < 3; ++a) {
         part.key_min[a] = t.lo[a];
@@ -313,12 +317,18 @@ class ScanInserter {
       else
         add_points<false>(first, last, nullptr);
     }
-    template <bool Rated, class It>
+    // insert_chunked: the hits straight into hit_map, and neither the key box nor the steps
+    // (the box is known before the points are collected).
+    template <class It>
+    void add_chunk(It first, It last) {
+      add_points<false, true>(first, last, nullptr);
+    }
+    template <bool Rated, bool Chunk = false, class It>
     void add_points(It first, It last, const EndpointRating* rating) {
       // At most one hit and one ray per point: room for them first, then plain stores.
       const auto n = static_cast<std::size_t>(std::distance(first, last));
       Tally t = start();
-      t.hit = part.hits.room_for(n);
+      if (!Chunk) t.hit = part.hits.room_for(n);
       t.ray = part.rays.room_for(n);
       for (; first != last; ++first) {
         ++t.points;
@@ -328,12 +338,12 @@ class ScanInserter {
           ++t.nonfinite;
           continue;
         }
-        add<Rated>(q, r, t);
+        add<Rated, Chunk>(q, r, t);
       }
       finish(t);
     }
 
-    template <bool Rated>
+    template <bool Rated, bool Chunk = false>
     KNNOCC_ALWAYS_INLINE void add(const Point3f& p, const EndpointRating* r, Tally& t) {
       const Point3f& o = origin;
       std::int64_t k[3];
@@ -342,24 +352,29 @@ class ScanInserter {
           ++t.out_of_range;  // OctoMap's ray check fails on the same endpoint
           return;
         }
-        *t.hit++ = pack(k);  // even when the origin is out of range, as OctoMap
-        extend_box(k, t);
+        // Even when the origin is out of range, as OctoMap.
+        if constexpr (Chunk) {
+          detail::set_bit(hit_map->words(), hit_map->index(k[0], k[1], k[2]));
+        } else {
+          *t.hit++ = pack(k);
+          extend_box(k, t);
+        }
         if constexpr (Rated) {
           part.hit_logodds.push_back(r->logodds);
           if (!r->casts_ray) return;
         }
-        add_ray<false>(p, k, t);  // the box holds k already
+        add_ray<false, Chunk>(p, k, t);  // the box holds k already
       } else {
         ++t.beyond_max_range;
         if constexpr (Rated)
           if (!r->casts_ray) return;
         const Point3f e = truncate_ray(o, p, max_range);
-        if (rounding.point_to_key(e, k)) add_ray<true>(e, k, t);
+        if (rounding.point_to_key(e, k)) add_ray<!Chunk, Chunk>(e, k, t);
       }
     }
 
     // Keeps the rays that visit at least one voxel (start_ray() == RayStart::walk).
-    template <bool ExtendBox>
+    template <bool ExtendBox, bool Chunk = false>
     KNNOCC_ALWAYS_INLINE void add_ray(const Point3f& end, const std::int64_t (&k)[3], Tally& t) {
       if (!origin_in_range ||
           (k[0] == origin_key[0] && k[1] == origin_key[1] && k[2] == origin_key[2]))
@@ -370,9 +385,10 @@ class ScanInserter {
       ray.end = end;
       for (int a = 0; a < 3; ++a) ray.key[a] = static_cast<std::int32_t>(k[a]);
       if (ExtendBox) extend_box(k, t);
-      t.steps += static_cast<std::size_t>(std::llabs(k[0] - origin_key[0]) +
-                                          std::llabs(k[1] - origin_key[1]) +
-                                          std::llabs(k[2] - origin_key[2]));
+      if (!Chunk)
+        t.steps += static_cast<std::size_t>(std::llabs(k[0] - origin_key[0]) +
+                                            std::llabs(k[1] - origin_key[1]) +
+                                            std::llabs(k[2] - origin_key[2]));
     }
 
     static KNNOCC_ALWAYS_INLINE void extend_box(const std::int64_t (&k)[3], Tally& t) {
@@ -501,7 +517,16 @@ class ScanInserter {
   Bounds point_bounds(It first, std::size_t a, std::size_t b, double max_range) const {
     const Point3f o = origin_;
     float lo[3] = {o.x, o.y, o.z}, hi[3] = {o.x, o.y, o.z};
-    for (std::size_t i = a; i < b; ++i) {
+    // Point3f in contiguous storage (std::vector, a pointer) whose points are all finite: the
+    // vectorised loop. Otherwise, and for other point types and containers, point by point.
+    bool done = false;
+    if constexpr (std::is_same_v<It, const Point3f*> || std::is_same_v<It, Point3f*> ||
+                  std::is_same_v<It, typename std::vector<Point3f>::const_iterator> ||
+                  std::is_same_v<It, typename std::vector<Point3f>::iterator>) {
+      if (b > a)
+        done = detail::finite_bounds(&first[static_cast<std::ptrdiff_t>(a)], b - a, lo, hi);
+    }
+    for (std::size_t i = done ? b : a; i < b; ++i) {
       const Point3f p = to_point3f(first[static_cast<std::ptrdiff_t>(i)]);
       // A non-finite point counts as the origin, which the bounds hold already: no branch.
       const bool ok = detail::finite(p);
@@ -578,10 +603,8 @@ class ScanInserter {
     prepare_dense();
     const detail::RayFan fan = dense_fan();
     const std::size_t chunks = (n + chunk_points - 1) / chunk_points;
-    for (unsigned w = 0; w < threads_; ++w) {  // here: a thread may get no chunk of this scan
+    for (unsigned w = 0; w < threads_; ++w)  // here: a thread may get no chunk of this scan
       workers_[w]->part.rays.reserve(chunk_points);
-      workers_[w]->part.hits.reserve(chunk_points);
-    }
     next_chunk_->store(0, std::memory_order_relaxed);
     auto job = [&](unsigned w) {
       Worker& worker = *workers_[w];
@@ -590,11 +613,10 @@ class ScanInserter {
       for (std::size_t c; (c = next_chunk_->fetch_add(1, std::memory_order_relaxed)) < chunks;) {
         const std::size_t a = c * chunk_points, b = std::min(n, a + chunk_points);
         part.rays.clear();
-        part.hits.clear();
-        collector(w, max_range)
-            .add_points(first + static_cast<std::ptrdiff_t>(a),
-                        first + static_cast<std::ptrdiff_t>(b), nullptr);
-        mark_hits(worker);
+        Collector collect_chunk = collector(w, max_range);
+        collect_chunk.hit_map = &worker.hit;
+        collect_chunk.add_chunk(first + static_cast<std::ptrdiff_t>(a),
+                                first + static_cast<std::ptrdiff_t>(b));
         bool given = false;  // the chunk's rays, handed out once
         worker.visits += walk_dense_rays(worker, fan, [&](const Ray*& pos, const Ray*& stop) {
           pos = part.rays.data();

@@ -16,51 +16,35 @@
 #include <string>
 #include <vector>
 
-#include <knnocc/io/sequence.hpp>
+#include "bench_common.hpp"
+
 #include <knnocc/io/xyz.hpp>
 #include <knnocc/map/scan_inserter.hpp>
 #include <knnocc_old/map/scan_inserter.hpp>
 
 namespace {
 
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-struct Scan {
-  knnocc::Point3f origin;
-  std::vector<knnocc::Point3f> points;
-  std::vector<knnocc_old::Point3f> old_points;  // the same points, as the old version's type
-};
+using knnocc::bench::now;
+using knnocc::bench::Scan;
 
 std::vector<Scan> load(const std::string& data) {
-  std::vector<Scan> scans;
-  if (data.size() > 4 && data.compare(data.size() - 4, 4, ".dat") == 0) {
-    scans.push_back({knnocc::Point3f{}, knnocc::io::read_xyz(data).points, {}});
-  } else {
-    const auto seq = knnocc::io::Sequence::open(data);
-    for (std::size_t i = 0; i < seq.size(); ++i) {
-      Scan s;
-      knnocc::io::transform_to_world(seq.pose(i), seq.load_cloud(i).points, s.points);
-      const auto& t = seq.pose(i).t;
-      s.origin = knnocc::Point3f{float(t.x()), float(t.y()), float(t.z())};
-      scans.push_back(std::move(s));
-    }
-  }
-  for (auto& s : scans)
-    for (const auto& p : s.points) s.old_points.push_back({p.x, p.y, p.z});
-  return scans;
+  if (data.size() > 4 && data.compare(data.size() - 4, 4, ".dat") == 0)
+    return {Scan{knnocc::Point3f{}, knnocc::io::read_xyz(data).points}};
+  return knnocc::bench::sequence_scans(data);
 }
 
 // One insertion of every scan on a fresh map and inserter; returns seconds, sets the map's counts.
-template <class Map, class Inserter, class Point, class Pick>
-double run(const std::vector<Scan>& scans, double res, unsigned threads, Pick pick,
+// points_of(i): scan i's points as the version's Point3f.
+template <class Map, class Inserter, class Point, class PointsOf>
+double run(const std::vector<Scan>& scans, PointsOf points_of, double res, unsigned threads,
            std::size_t (&counts)[2]) {
   Map map(res);
   Inserter inserter(map, {}, threads);
   const double t0 = now();
-  for (const auto& s : scans)
-    inserter.insert_point_cloud(Point{s.origin.x, s.origin.y, s.origin.z}, pick(s));
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    const auto& o = scans[i].origin;
+    inserter.insert_point_cloud(Point{o.x, o.y, o.z}, points_of(i));
+  }
   const double t = now() - t0;
   const auto c = map.count_voxels();
   counts[0] = c.occupied;
@@ -79,20 +63,26 @@ int main(int argc, char** argv) {
   const int pairs = std::max(1, std::atoi(argv[2]));
   const double res = std::atof(argv[3]);
   const auto scans = load(argv[4]);
+  std::vector<std::vector<knnocc_old::Point3f>> old_points;  // the same points, the old type
+  for (const auto& s : scans) {
+    old_points.emplace_back();
+    for (const auto& p : s.points) old_points.back().push_back({p.x, p.y, p.z});
+  }
+  const auto new_of = [&](std::size_t i) -> const auto& { return scans[i].points; };
+  const auto old_of = [&](std::size_t i) -> const auto& { return old_points[i]; };
   std::vector<double> t_old, t_new;
   std::size_t c_old[2] = {0, 0}, c_new[2] = {0, 0};
   bool same = true;
   for (int pair = 0; pair < pairs; ++pair)
     for (int k = 0; k < 2; ++k) {
-      if ((k == 0) == (pair % 2 == 0)) {  // the order alternates too
+      if ((k == 0) == (pair % 2 == 0))  // the order alternates too
         t_old.push_back(run<knnocc_old::OccupancyMap<knnocc_old::OcKey>,
                             knnocc_old::ScanInserter<knnocc_old::OcKey>, knnocc_old::Point3f>(
-            scans, res, threads, [](const Scan& s) -> const auto& { return s.old_points; }, c_old));
-      } else {
-        t_new.push_back(run<knnocc::OccupancyMap<knnocc::OcKey>,
-                            knnocc::ScanInserter<knnocc::OcKey>, knnocc::Point3f>(
-            scans, res, threads, [](const Scan& s) -> const auto& { return s.points; }, c_new));
-      }
+            scans, old_of, res, threads, c_old));
+      else
+        t_new.push_back(
+            run<knnocc::OccupancyMap<knnocc::OcKey>, knnocc::ScanInserter<knnocc::OcKey>,
+                knnocc::Point3f>(scans, new_of, res, threads, c_new));
       if (t_old.size() == t_new.size()) same = same && c_old[0] == c_new[0] && c_old[1] == c_new[1];
     }
   std::vector<double> ratio;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <knnocc/core/point3.hpp>
+#include <knnocc/io/sequence.hpp>
 
 #if KNNOCC_HAVE_OCTOMAP
 #include <octomap/OcTree.h>
@@ -44,6 +45,19 @@ struct Scan {
   Point3f origin;
   std::vector<Point3f> points;
 };
+
+/// The clouds of a sequence directory (io::Sequence) in the world frame, each seen from its
+/// pose's position.
+inline std::vector<Scan> sequence_scans(const std::string& dir) {
+  const auto seq = io::Sequence::open(dir);
+  std::vector<Scan> scans(seq.size());
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    io::transform_to_world(seq.pose(i), seq.load_cloud(i).points, scans[i].points);
+    const auto& t = seq.pose(i).t;
+    scans[i].origin = Point3f{float(t.x()), float(t.y()), float(t.z())};
+  }
+  return scans;
+}
 
 /// Current resident memory of this process, in MB (0 when /proc is not there).
 inline double resident_mb() {

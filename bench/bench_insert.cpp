@@ -33,7 +33,6 @@
 
 #include "bench_common.hpp"
 
-#include <knnocc/io/sequence.hpp>
 #include <knnocc/io/xyz.hpp>
 #include <knnocc/map/scan_inserter.hpp>
 #include <knnocc/version.hpp>
@@ -71,15 +70,8 @@ std::vector<Dataset> load(const fs::path& data) {
     sets.push_back(std::move(d));
   }
   if (fs::is_directory(data / "tum_fr2_pioneer_slam2")) {
-    const auto seq = knnocc::io::Sequence::open((data / "tum_fr2_pioneer_slam2").string());
-    Dataset d{"TUM fr2/pioneer_slam2 (10 clouds)", {}};
-    for (std::size_t i = 0; i < seq.size(); ++i) {
-      Scan s;
-      knnocc::io::transform_to_world(seq.pose(i), seq.load_cloud(i).points, s.points);
-      const auto& t = seq.pose(i).t;
-      s.origin = Point3f{float(t.x()), float(t.y()), float(t.z())};
-      d.scans.push_back(std::move(s));
-    }
+    Dataset d{"TUM fr2/pioneer_slam2 (10 clouds)",
+              knnocc::bench::sequence_scans((data / "tum_fr2_pioneer_slam2").string())};
     sets.push_back(std::move(d));
   }
   return sets;

@@ -190,7 +190,7 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
     // Chunks of 7 and 13 rays: lanes, refills and the scalar drain all happen in every chunk (four
     // lanes, and eight in the longer chunks), and a voxel missed by one ray is rarely hidden by
     // another ray of the same chunk.
-    std::size_t walked = 0;
+    std::size_t walked = 0, clear = 0;
     for (std::size_t first = 0, chunk = 7; first < rays.size();
          first += chunk, chunk = chunk == 7 ? 13 : 7) {
       std::vector<knnocc::detail::LinearRay> linear;
@@ -207,6 +207,13 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
         r.index = box.index(w.origin[0], w.origin[1], w.origin[2]);
         r.end_index = box.index(w.end[0], w.end[1], w.end[2]);
         for (int a = 0; a < 3; ++a) r.stride[a] = w.step[a] * box.stride(a);
+        // The four-lane walk skips the end tests of a clear end as in ScanInserter.
+        const std::int32_t ko[3] = {w.origin[0], w.origin[1], w.origin[2]};
+        const std::int64_t stride[3] = {box.stride(0), box.stride(1), box.stride(2)};
+        const knnocc::detail::RayFan fan(grid, rays[i].first, ko, base, stride);
+        const knnocc::detail::RayEnd end{rays[i].second, {w.end[0], w.end[1], w.end[2]}};
+        r.clear_end = knnocc::detail::end_point_clear<OcKey>(fan, end, r.state.length);
+        clear += r.clear_end;
         linear.push_back(r);
         expected_visits += keys[i].size();
         for (const OcKey& k : keys[i])
@@ -242,7 +249,9 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
       }
       walked += expected_visits;
     }
-    MESSAGE(walked << " voxels walked at resolution " << res);
+    MESSAGE(walked << " voxels walked at resolution " << res << ", " << clear
+                   << " rays with a clear end");
+    CHECK(clear > 1000);  // both kinds of lanes walk
   }
 #if KNNOCC_AVX2_LANES
   const auto tested = [](bool has) {
@@ -288,7 +297,8 @@ TEST_CASE("insert_threads.simd_ray_setup_matches_setup_walk") {
       const auto& a = fast[i];
       const auto& b = slow[i];
       bool same = a.index == b.index && a.end_index == b.end_index &&
-                  a.state.length == b.state.length && a.state.steps_to_end == b.state.steps_to_end;
+                  a.state.length == b.state.length &&
+                  a.state.steps_to_end == b.state.steps_to_end && a.clear_end == b.clear_end;
       for (int k = 0; k < 3; ++k)
         same = same && a.stride[k] == b.stride[k] && a.state.t_max[k] == b.state.t_max[k] &&
                a.state.t_delta[k] == b.state.t_delta[k];
@@ -314,8 +324,10 @@ TEST_CASE("insert_threads.simd_ray_setup_matches_setup_walk") {
   knnocc::detail::setup_linear_rays(grid, fan, rays.data(), 12, fast.data());
   knnocc::detail::LinearRay slow;
   knnocc::detail::setup_linear_ray(grid, fan, ray, slow);
+  CHECK_FALSE(slow.clear_end);
   for (const int i : {3, 11}) {
     CAPTURE(i);
+    CHECK_FALSE(fast[i].clear_end);
     CHECK(fast[i].end_index == slow.end_index);
     CHECK(fast[i].state.steps_to_end == slow.state.steps_to_end);
     for (int a = 0; a < 3; ++a) {
@@ -327,4 +339,78 @@ TEST_CASE("insert_threads.simd_ray_setup_matches_setup_walk") {
   std::vector<OcKey> keys;
   REQUIRE(knnocc::compute_ray_keys(grid, o, e, keys));
   CHECK(keys.size() == 1);  // the origin voxel; the next step lands on the end voxel
+}
+
+namespace {
+
+// walk_ray's cursor that keeps the bit index and counts the visits, storing nothing.
+struct StepCounter {
+  std::int64_t index;
+  const std::int64_t* stride;
+  std::int64_t end_index;
+  std::size_t visits = 0;
+  template <int Axis>
+  void step() {
+    index += stride[Axis];
+  }
+  bool at_end() const { return index == end_index; }
+  bool visit() {
+    ++visits;
+    return true;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("insert_threads.clear_end_points_end_on_their_voxel") {
+  // end_point_clear() lets the four-lane walk drop the end tests of all but a ray's last step.
+  // Its claim, checked on the one-ray walk: a flagged ray ends on its end voxel after exactly
+  // steps_to_end steps, not earlier by its length and not past the voxel. The end points lie 0-40
+  // float steps from a voxel border along one to three axes, where some rays do end otherwise
+  // (the test asserts that it meets such rays, so that it could catch a margin too small).
+  knnocc::test::Rng rng(13);
+  std::size_t flagged = 0, other_end = 0, flagged_other_end = 0, rays = 0;
+  for (const double res : {0.05, 0.1, 0.37}) {
+    CAPTURE(res);
+    const knnocc::Grid<OcKey> grid(res);
+    std::uniform_real_distribution<float> u(-1.f, 1.f), far(-40.f, 40.f);
+    std::uniform_int_distribution<int> ulps(-40, 40), cell(-400, 400), axes(0, 7);
+    const std::int64_t lo[3] = {0, 0, 0},
+                       stride[3] = {1, std::int64_t{1} << 17, std::int64_t{1} << 34};
+    for (int i = 0; i < 30000; ++i) {
+      const Point3f o{u(rng), u(rng), u(rng)};
+      Point3f e{far(rng), far(rng), far(rng)};
+      if (i % 3 == 0) e = {o.x + u(rng), o.y + u(rng), o.z + u(rng)};  // short rays too
+      const int snap = axes(rng);  // which coordinates go next to a border (0: none)
+      float* c[3] = {&e.x, &e.y, &e.z};
+      for (int a = 0; a < 3; ++a) {
+        if (!((snap >> a) & 1)) continue;
+        float v = static_cast<float>(cell(rng) * res);
+        for (int k = ulps(rng); k != 0; k += k > 0 ? -1 : 1)
+          v = std::nextafter(v, k > 0 ? INFINITY : -INFINITY);
+        *c[a] = v;
+      }
+      OcKey ko, ke;
+      REQUIRE(grid.point_to_key(o, ko));
+      REQUIRE(grid.point_to_key(e, ke));
+      if (ko == ke) continue;
+      const std::int32_t okey[3] = {ko[0], ko[1], ko[2]};
+      const knnocc::detail::RayFan fan(grid, o, okey, lo, stride);
+      knnocc::detail::LinearRay r;
+      knnocc::detail::setup_linear_ray(grid, fan, {e, {ke[0], ke[1], ke[2]}}, r);
+      StepCounter walk{r.index, r.stride, r.end_index};
+      knnocc::walk_ray(r.state, walk);
+      const bool on_end = walk.index == r.end_index &&
+                          walk.visits + 1 == static_cast<std::size_t>(r.state.steps_to_end);
+      ++rays;
+      flagged += r.clear_end;
+      other_end += !on_end;
+      flagged_other_end += r.clear_end && !on_end;
+    }
+  }
+  MESSAGE(rays << " rays, " << flagged << " with a clear end, " << other_end
+               << " ending elsewhere than on their end voxel's step");
+  CHECK(flagged_other_end == 0);
+  CHECK(other_end > 100);      // the rays the flag must leave out are there
+  CHECK(flagged > rays / 10);  // and the flag is not simply always false
 }

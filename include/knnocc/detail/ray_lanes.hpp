@@ -11,14 +11,14 @@
 // same doubles, so exactly the same voxels; CPUs with AVX-512F walk eight rays at once with the
 // same comparisons (KNNOCC_NO_AVX512 keeps them on four lanes). A lane whose ray ends takes the
 // next ray of the stream; when the stream runs dry the remaining rays finish on the scalar walk.
-// The four-lane walk tests for ends only in the steps where a lane can end (unchecked_steps):
-// most steps are plain steps; the eight-lane walk still tests at every step. The set-up of the
-// rays (setup_walk) goes eight at a time on AVX2 CPUs.
-// Precondition of the vector paths: a box of fewer than 2^16 + 64 voxels per edge (ScanInserter's
-// kDenseMaxEdge), which bounds both a ray's rounding error (unchecked_steps) and the bit indices
-// converted through doubles in the set-up.
-// Elsewhere (no AVX2, other architectures, or KNNOCC_NO_SIMD defined) everything runs on the
-// scalar code, with the same results.
+// The four-lane walk tests for ends only in the steps where a lane can end: the last one for a
+// ray whose end point lies clear of its voxel's borders (end_point_clear, nearly every ray), the
+// last four otherwise (unchecked_steps); the eight-lane walk still tests at every step. The set-up
+// of the rays (setup_walk) goes eight at a time on AVX2 CPUs. Precondition of the vector paths: a
+// box of fewer than 2^16 + 64 voxels per edge (ScanInserter's kDenseMaxEdge), which bounds both a
+// ray's rounding error (unchecked_steps) and the bit indices converted through doubles in the
+// set-up. Elsewhere (no AVX2, other architectures, or KNNOCC_NO_SIMD defined) everything runs on
+// the scalar code, with the same results.
 
 #include <algorithm>
 #include <cstddef>
@@ -44,6 +44,7 @@ struct LinearRay {
   std::int64_t index;      ///< bit of the voxel the walk stands on
   std::int64_t stride[3];  ///< bit offset of one step along each axis (0: never steps)
   std::int64_t end_index;  ///< bit of the end voxel
+  bool clear_end = false;  ///< the walk cannot end before steps_to_end (see end_point_clear)
 };
 
 /// A ray of a scan, as ScanInserter collects it: its end point and end voxel (different from the
@@ -59,13 +60,14 @@ struct RayFan {
   Point3f origin;
   std::int32_t origin_key[3];
   double resolution;
-  double border[3][2];  // [axis][step > 0]: setup_walk's border of the origin voxel
+  double inv_resolution;  // 1 / resolution, as KeyRounding
+  double border[3][2];    // [axis][step > 0]: setup_walk's border of the origin voxel
   std::int64_t lo[3], stride[3];
 
   template <class Key>
   RayFan(const Grid<Key>& grid, const Point3f& o, const std::int32_t (&ko)[3],
          const std::int64_t (&box_lo)[3], const std::int64_t (&box_stride)[3])
-      : origin(o), resolution(grid.resolution()) {
+      : origin(o), resolution(grid.resolution()), inv_resolution(1.0 / grid.resolution()) {
     for (int a = 0; a < 3; ++a) {
       origin_key[a] = ko[a];
       lo[a] = box_lo[a];
@@ -82,6 +84,34 @@ struct RayFan {
   }
 };
 
+/// Margin, in voxels, that end_point_clear() asks between an end point and its voxel's borders.
+inline double end_margin(double length_voxels) { return 1e-5 * length_voxels + 1e-3; }
+
+/// Whether the walk of `ray` (of float length `length`) provably ends on its end voxel after
+/// exactly steps_to_end steps, never earlier by its length: true when along every axis the end
+/// point lies more than end_margin() voxels inside its voxel. Why that suffices: the walk's line,
+/// origin + t * (float direction), is at t = length within about 5e-7 * length of the end point
+/// (float direction, norm and differences each err by under 2^-24 relative), and its border
+/// crossings t_max err by far less (double sums). So at t = length the walk has crossed, along
+/// each axis, exactly the borders between the origin's voxel and the end voxel and no other:
+/// steps_to_end crossings lie below the length, and after any earlier step the next crossing,
+/// which the length test compares, is one of them. Then no step before steps_to_end can end the
+/// walk. The margin is 20 times that error, plus 1e-3 voxel; a test walks rays 0-40 float steps
+/// from borders and checks the claim on every ray it flags.
+template <class Key>
+bool end_point_clear(const RayFan& fan, const RayEnd& ray, double length) {
+  const double margin = end_margin(length * fan.inv_resolution);
+  const float e[3] = {ray.end.x, ray.end.y, ray.end.z};
+  bool clear = true;
+  for (int a = 0; a < 3; ++a) {
+    // The end point's place in its voxel: KeyRounding's scaled coordinate less the voxel's index.
+    const double f = fan.inv_resolution * static_cast<double>(e[a]) -
+                     static_cast<double>(ray.key[a] - static_cast<std::int32_t>(Key::center));
+    clear = clear && f > margin && f < 1.0 - margin;
+  }
+  return clear;
+}
+
 /// One ray's set-up: setup_walk() (OctoMap's arithmetic) and the bit indices.
 template <class Key>
 void setup_linear_ray(const Grid<Key>& grid, const RayFan& fan, const RayEnd& ray, LinearRay& r) {
@@ -90,6 +120,7 @@ void setup_linear_ray(const Grid<Key>& grid, const RayFan& fan, const RayEnd& ra
   r.index = fan.index(fan.origin_key);
   r.end_index = fan.index(ray.key);
   for (int a = 0; a < 3; ++a) r.stride[a] = step[a] * fan.stride[a];
+  r.clear_end = end_point_clear<Key>(fan, ray, r.state.length);
 }
 
 KNNOCC_ALWAYS_INLINE void set_bit(std::uint64_t* bits, std::int64_t i) {
@@ -140,14 +171,11 @@ struct LaneBook {
   std::int64_t iteration = 0;  // steps taken by every lane
   std::int64_t due[Lanes];     // value of `iteration` when a lane's step countdown runs out
   std::int64_t safe[Lanes];    // up to this value of `iteration` a lane cannot end
-  alignas(64) std::int64_t end[Lanes];  // end voxels and lengths, for the steps that may end
-  alignas(64) double length[Lanes];
 
   KNNOCC_ALWAYS_INLINE void load(int l, const LinearRay& r) {
     due[l] = iteration + r.state.steps_to_end;
-    safe[l] = iteration + unchecked_steps(r.state);
-    end[l] = r.end_index;
-    length[l] = r.state.length;
+    // A clear end: only the last step, onto the end voxel, needs the test.
+    safe[l] = iteration + (r.clear_end ? r.state.steps_to_end - 1 : unchecked_steps(r.state));
   }
   /// Steps every lane can take from here without an end test.
   KNNOCC_ALWAYS_INLINE std::int64_t unchecked() const {
@@ -251,12 +279,30 @@ KNNOCC_TARGET_AVX2 void setup_linear_rays8(const RayFan& fan, const RayEnd* rays
       index[h] = _mm256_add_pd(index[h], _mm256_mul_pd(_mm256_cvtepi32_pd(half), fan_stride));
     }
   }
+  // end_point_clear(), operation for operation.
+  const __m256d inv_res = _mm256_set1_pd(fan.inv_resolution), one = _mm256_set1_pd(1.0);
+  unsigned clear = 0;
   for (int h = 0; h < 2; ++h) {
     const __m256i bits = _mm256_castpd_si256(_mm256_add_pd(index[h], magic));
     _mm256_store_si256(reinterpret_cast<__m256i*>(end_index + 4 * h),
                        _mm256_sub_epi64(bits, _mm256_castpd_si256(magic)));
-    _mm256_store_pd(len + 4 * h, _mm256_cvtps_pd(h ? _mm256_extractf128_ps(length, 1)
-                                                   : _mm256_castps256_ps128(length)));
+    const __m256d ld =
+        _mm256_cvtps_pd(h ? _mm256_extractf128_ps(length, 1) : _mm256_castps256_ps128(length));
+    _mm256_store_pd(len + 4 * h, ld);
+    const __m256d margin = _mm256_add_pd(
+        _mm256_mul_pd(_mm256_set1_pd(1e-5), _mm256_mul_pd(ld, inv_res)), _mm256_set1_pd(1e-3));
+    const __m256d inner = _mm256_sub_pd(one, margin);
+    __m256d ok = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+    for (int a = 0; a < 3; ++a) {
+      const __m256d ed = _mm256_cvtps_pd(_mm_load_ps(e[a] + 4 * h));
+      const __m128i k4 =
+          _mm_sub_epi32(_mm_load_si128(reinterpret_cast<const __m128i*>(key[a] + 4 * h)),
+                        _mm_set1_epi32(static_cast<std::int32_t>(Key::center)));
+      const __m256d f = _mm256_sub_pd(_mm256_mul_pd(inv_res, ed), _mm256_cvtepi32_pd(k4));
+      ok = _mm256_and_pd(ok, _mm256_and_pd(_mm256_cmp_pd(f, margin, _CMP_GT_OQ),
+                                           _mm256_cmp_pd(f, inner, _CMP_LT_OQ)));
+    }
+    clear |= static_cast<unsigned>(_mm256_movemask_pd(ok)) << (4 * h);
   }
   _mm256_store_si256(reinterpret_cast<__m256i*>(steps), step_sum);
   const std::int64_t origin_index = fan.index(fan.origin_key);
@@ -271,16 +317,21 @@ KNNOCC_TARGET_AVX2 void setup_linear_rays8(const RayFan& fan, const RayEnd* rays
     r.state.steps_to_end = steps[k];
     r.index = origin_index;
     r.end_index = end_index[k];
+    r.clear_end = (clear >> k) & 1u;
   }
 }
 
-// Four rays, one per 64-bit lane: what every step needs (lengths and end voxels, needed only by
-// the steps that may end a lane, wait in the LaneBook: the step loop then has registers to spare).
+// Four rays, one per 64-bit lane. The lengths and end voxels are needed only by the steps that
+// may end a lane; they are vectors too, blended in on a refill like the rest: kept as arrays
+// written lane by lane, their 32-byte reload after each refill waited for the 8-byte stores
+// (a load wider than the stores before it cannot take its data from them).
 struct RayLanes {
   __m256d t0, t1, t2;  // next border crossing per axis
   __m256d d0, d1, d2;  // between two borders per axis
   __m256i index;       // bit of the current voxel
   __m256i s0, s1, s2;  // bit offset of a step per axis
+  __m256d length;      // ray length
+  __m256i end;         // bit of the end voxel
 };
 
 // Puts r into lane l: broadcast and blend, so the other lanes stay in registers.
@@ -297,22 +348,23 @@ KNNOCC_TARGET_AVX2 KNNOCC_ALWAYS_INLINE void put_lane(RayLanes& v, int l, const 
   v.s0 = _mm256_blendv_epi8(v.s0, _mm256_set1_epi64x(r.stride[0]), mi);
   v.s1 = _mm256_blendv_epi8(v.s1, _mm256_set1_epi64x(r.stride[1]), mi);
   v.s2 = _mm256_blendv_epi8(v.s2, _mm256_set1_epi64x(r.stride[2]), mi);
+  v.length = _mm256_blendv_pd(v.length, _mm256_set1_pd(r.state.length), m);
+  v.end = _mm256_blendv_epi8(v.end, _mm256_set1_epi64x(r.end_index), mi);
 }
 
 // The ray in lane l, with `steps_to_end` steps left before it can stand on its end voxel.
-KNNOCC_TARGET_AVX2 inline LinearRay get_lane(const RayLanes& v, const LaneBook<4>& book, int l,
-                                             std::int64_t steps_to_end) {
-  alignas(32) double d[6][4];
-  alignas(32) std::int64_t i[4][4];
-  const __m256d dv[6] = {v.t0, v.t1, v.t2, v.d0, v.d1, v.d2};
-  const __m256i iv[4] = {v.index, v.s0, v.s1, v.s2};
-  for (int k = 0; k < 6; ++k) _mm256_store_pd(d[k], dv[k]);
-  for (int k = 0; k < 4; ++k) _mm256_store_si256(reinterpret_cast<__m256i*>(i[k]), iv[k]);
+KNNOCC_TARGET_AVX2 inline LinearRay get_lane(const RayLanes& v, int l, std::int64_t steps_to_end) {
+  alignas(32) double d[7][4];
+  alignas(32) std::int64_t i[5][4];
+  const __m256d dv[7] = {v.t0, v.t1, v.t2, v.d0, v.d1, v.d2, v.length};
+  const __m256i iv[5] = {v.index, v.s0, v.s1, v.s2, v.end};
+  for (int k = 0; k < 7; ++k) _mm256_store_pd(d[k], dv[k]);
+  for (int k = 0; k < 5; ++k) _mm256_store_si256(reinterpret_cast<__m256i*>(i[k]), iv[k]);
   return LinearRay{
-      {{d[0][l], d[1][l], d[2][l]}, {d[3][l], d[4][l], d[5][l]}, book.length[l], steps_to_end},
+      {{d[0][l], d[1][l], d[2][l]}, {d[3][l], d[4][l], d[5][l]}, d[6][l], steps_to_end},
       i[0][l],
       {i[1][l], i[2][l], i[3][l]},
-      book.end[l]};
+      i[4][l]};
 }
 
 // The axis each lane steps along next, walk_ray()'s choice in branch-free form: x if t0 < t1 and
@@ -334,16 +386,14 @@ KNNOCC_TARGET_AVX2 KNNOCC_ALWAYS_INLINE void advance_lanes(RayLanes& v) {
 }
 
 // One step on the four lanes of v; returns the lanes that ended (bit l).
-KNNOCC_TARGET_AVX2 KNNOCC_ALWAYS_INLINE unsigned step_lanes(RayLanes& v, const LaneBook<4>& book) {
+KNNOCC_TARGET_AVX2 KNNOCC_ALWAYS_INLINE unsigned step_lanes(RayLanes& v) {
   advance_lanes(v);
   // A lane ends on its end voxel (the bit index is one-to-one, so one comparison does what
   // walk_ray's countdown does) or once every next border lies beyond its length;
   // std::min(std::min(t0, t1), t2), operand order included (vminpd(b, a) = b < a ? b : a).
   const __m256d tmin = _mm256_min_pd(v.t2, _mm256_min_pd(v.t1, v.t0));
-  const __m256d length = _mm256_load_pd(book.length);
-  const __m256i end = _mm256_load_si256(reinterpret_cast<const __m256i*>(book.end));
-  const __m256d ended = _mm256_or_pd(_mm256_cmp_pd(tmin, length, _CMP_GT_OQ),
-                                     _mm256_castsi256_pd(_mm256_cmpeq_epi64(v.index, end)));
+  const __m256d ended = _mm256_or_pd(_mm256_cmp_pd(tmin, v.length, _CMP_GT_OQ),
+                                     _mm256_castsi256_pd(_mm256_cmpeq_epi64(v.index, v.end)));
   return static_cast<unsigned>(_mm256_movemask_pd(ended));
 }
 
@@ -365,8 +415,8 @@ template <class Next>
 KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* bits) {
   constexpr int kLanes = 4;
   RayLanes v;
-  v.t0 = v.t1 = v.t2 = v.d0 = v.d1 = v.d2 = _mm256_setzero_pd();
-  v.index = v.s0 = v.s1 = v.s2 = _mm256_setzero_si256();
+  v.t0 = v.t1 = v.t2 = v.d0 = v.d1 = v.d2 = v.length = _mm256_setzero_pd();
+  v.index = v.s0 = v.s1 = v.s2 = v.end = _mm256_setzero_si256();
   LaneBook<kLanes> book;
   std::size_t visits = 0;
   LinearRay r;
@@ -378,8 +428,7 @@ KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* 
     book.load(loaded, r);
   }
   if (loaded < kLanes) {  // too few rays: the scalar walk
-    for (int l = 0; l < loaded; ++l)
-      visits += finish_linear_ray(get_lane(v, book, l, book.due[l]), bits);
+    for (int l = 0; l < loaded; ++l) visits += finish_linear_ray(get_lane(v, l, book.due[l]), bits);
     return visits;
   }
 
@@ -396,7 +445,7 @@ KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* 
     }
 
     // A lane may end: one step with the end test.
-    unsigned done = step_lanes(v, book);
+    unsigned done = step_lanes(v);
     ++book.iteration;
     if (done) {
       // The lanes that ended take the next rays of the stream; a refilled lane stands on its new
@@ -410,7 +459,7 @@ KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* 
         } else {  // the stream ran dry: the rays still walking finish one at a time
           for (unsigned live = ~done & 0xfu; live; live &= live - 1) {
             const int j = __builtin_ctz(live);
-            const LinearRay rj = get_lane(v, book, j, book.due[j] - book.iteration);
+            const LinearRay rj = get_lane(v, j, book.due[j] - book.iteration);
             set_bit(bits, rj.index);
             visits += 1 + finish_linear_ray(rj, bits);
           }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <knnocc/detail/point_bounds.hpp>
+#include <knnocc/detail/point_keys.hpp>
 #include <knnocc/map/scan_inserter.hpp>
 
 #include "test_support.hpp"
@@ -267,6 +268,74 @@ TEST_CASE("insert.large_scan_paths_with_far_and_out_of_range_points") {
       CHECK(st.beyond_max_range == 0);
     CHECK(dump(map) == dump(oracle));
   }
+}
+
+TEST_CASE_TEMPLATE("insert.eight_point_keys_match_key_rounding", Key, knnocc::OcKey,
+                   knnocc::WideKey) {
+  // point_keys8 (the chunked collect's keys, eight points at a time) against KeyRounding, point
+  // by point: coordinates of every size, on voxel borders and a few float steps beside them,
+  // at the ends of the key range and beyond it, NaN and Inf. It must give the same keys when all
+  // eight are in range and report false exactly when one of them is not.
+#if KNNOCC_AVX2_LANES
+  if (!knnocc::detail::cpu_has_avx2()) return;
+  knnocc::test::Rng rng(47);
+  for (const double res : {0.05, 0.1, 0.37}) {
+    CAPTURE(res);
+    const knnocc::Grid<Key> grid(res);
+    const knnocc::detail::KeyRounding<Key> rounding(grid);
+    const auto edge = static_cast<float>(static_cast<double>(Key::center) * res);
+    std::uniform_real_distribution<float> small(-3.f, 3.f), any(-edge, edge);
+    std::uniform_int_distribution<int> kind(0, 15), cell(-1000, 1000), ulps(-3, 3);
+    const auto coordinate = [&]() -> float {
+      switch (kind(rng)) {
+        case 0:
+          return std::numeric_limits<float>::quiet_NaN();
+        case 1:
+          return kind(rng) < 8 ? std::numeric_limits<float>::infinity()
+                               : -std::numeric_limits<float>::infinity();
+        case 2:  // at the ends of the key range
+          return std::nextafter(kind(rng) < 8 ? edge : -edge, ulps(rng) < 0 ? 0.f : INFINITY);
+        case 3:
+        case 4:
+        case 5: {  // on or beside a voxel border
+          float v = static_cast<float>(cell(rng) * res);
+          for (int k = ulps(rng); k != 0; k += k > 0 ? -1 : 1)
+            v = std::nextafter(v, k > 0 ? INFINITY : -INFINITY);
+          return v;
+        }
+        case 6:
+          return any(rng);
+        default:
+          return small(rng);
+      }
+    };
+    std::size_t in_range = 0, blocks = 0;
+    for (int b = 0; b < 20000; ++b) {
+      Point3f p[8];
+      const bool clean = b % 4 != 0;  // most blocks without NaN, Inf or the range ends
+      for (auto& q : p) {
+        q = {coordinate(), coordinate(), coordinate()};
+        if (clean)
+          for (float* c : {&q.x, &q.y, &q.z})
+            if (!(std::fabs(*c) < 0.5f * edge)) *c = small(rng);
+      }
+      std::int32_t key[3][8];
+      const bool ok = knnocc::detail::point_keys8<Key>(p, rounding.inverse_resolution(), key);
+      bool want = true;
+      std::int64_t k[8][3];
+      for (int j = 0; j < 8; ++j) want = rounding.point_to_key(p[j], k[j]) && want;
+      CAPTURE(b);
+      REQUIRE(ok == want);
+      ++blocks;
+      if (!ok) continue;
+      ++in_range;
+      for (int j = 0; j < 8; ++j)
+        for (int a = 0; a < 3; ++a) CHECK(key[a][j] == k[j][a]);
+    }
+    CHECK(in_range > blocks / 2);
+    CHECK(in_range < blocks);
+  }
+#endif
 }
 
 TEST_CASE("insert.finite_bounds_match_a_point_loop") {

@@ -26,6 +26,9 @@ class KeyRounding {
     return index(p.x, key[0]) && index(p.y, key[1]) && index(p.z, key[2]);
   }
 
+  /// The factor that scales a coordinate to voxels (1 / resolution).
+  double inverse_resolution() const { return inv_res_; }
+
   /// Grid::coord_to_index for one float coordinate.
   KNNOCC_ALWAYS_INLINE bool index(float c, std::int64_t& out) const {
     const double s = inv_res_ * static_cast<double>(c);

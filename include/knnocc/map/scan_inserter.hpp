@@ -60,6 +60,7 @@
 #include "../detail/huge_pages.hpp"
 #include "../detail/key_rounding.hpp"
 #include "../detail/point_bounds.hpp"
+#include "../detail/point_keys.hpp"
 #include "../detail/ray_lanes.hpp"
 #include "../detail/scan_bitmap.hpp"
 #include "../detail/thread_pool.hpp"
@@ -268,6 +269,13 @@ class ScanInserter {
 
   // ---- 1. collect -----------------------------------------------------------------------
 
+  // Iterators over Point3f in contiguous storage (std::vector, a pointer): the vectorised loops.
+  template <class It>
+  static constexpr bool contiguous_point3f =
+      std::is_same_v<It, const Point3f*> || std::is_same_v<It, Point3f*> ||
+      std::is_same_v<It, typename std::vector<Point3f>::const_iterator> ||
+      std::is_same_v<It, typename std::vector<Point3f>::iterator>;
+
   // OctoMap's computeUpdate, point by point, into one Part.
   struct Collector {
     const Point3f origin;
@@ -330,17 +338,42 @@ class ScanInserter {
       Tally t = start();
       if (!Chunk) t.hit = part.hits.room_for(n);
       t.ray = part.rays.room_for(n);
-      for (; first != last; ++first) {
-        ++t.points;
-        const Point3f q = to_point3f(*first);
-        const EndpointRating* r = Rated ? rating++ : nullptr;
-        if (!detail::finite(q)) {
-          ++t.nonfinite;
-          continue;
+#if KNNOCC_AVX2_LANES
+      // Chunks of contiguous Point3f without max_range: the keys eight points at a time.
+      if constexpr (Chunk && !Rated && contiguous_point3f<It>) {
+        if (max_range < 0.0 && detail::cpu_has_avx2()) {
+          const Point3f* p = &*first;
+          std::size_t i = 0;
+          for (; i + 8 <= n; i += 8) {
+            std::int32_t key[3][8];
+            if (!detail::point_keys8<Key>(p + i, rounding.inverse_resolution(), key)) {
+              for (std::size_t j = i; j < i + 8; ++j) add_one<Rated, Chunk>(p[j], nullptr, t);
+              continue;
+            }
+            t.points += 8;
+            for (int j = 0; j < 8; ++j) {
+              const std::int64_t k[3] = {key[0][j], key[1][j], key[2][j]};
+              detail::set_bit(hit_map->words(), hit_map->index(k[0], k[1], k[2]));
+              add_ray<false, Chunk>(p[i + static_cast<std::size_t>(j)], k, t);
+            }
+          }
+          first += static_cast<std::ptrdiff_t>(i);
         }
-        add<Rated, Chunk>(q, r, t);
       }
+#endif
+      for (; first != last; ++first)
+        add_one<Rated, Chunk>(to_point3f(*first), Rated ? rating++ : nullptr, t);
       finish(t);
+    }
+
+    template <bool Rated, bool Chunk>
+    KNNOCC_ALWAYS_INLINE void add_one(const Point3f& q, const EndpointRating* r, Tally& t) {
+      ++t.points;
+      if (!detail::finite(q)) {
+        ++t.nonfinite;
+        return;
+      }
+      add<Rated, Chunk>(q, r, t);
     }
 
     template <bool Rated, bool Chunk = false>
@@ -520,9 +553,7 @@ class ScanInserter {
     // Point3f in contiguous storage (std::vector, a pointer) whose points are all finite: the
     // vectorised loop. Otherwise, and for other point types and containers, point by point.
     bool done = false;
-    if constexpr (std::is_same_v<It, const Point3f*> || std::is_same_v<It, Point3f*> ||
-                  std::is_same_v<It, typename std::vector<Point3f>::const_iterator> ||
-                  std::is_same_v<It, typename std::vector<Point3f>::iterator>) {
+    if constexpr (contiguous_point3f<It>) {
       if (b > a)
         done = detail::finite_bounds(&first[static_cast<std::ptrdiff_t>(a)], b - a, lo, hi);
     }

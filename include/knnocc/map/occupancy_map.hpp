@@ -29,6 +29,7 @@
 #include "../core/grid.hpp"
 #include "../core/key.hpp"
 #include "../core/log_odds.hpp"
+#include "../detail/brick_values.hpp"
 #include "../detail/flat_index.hpp"
 #include "brick.hpp"
 #include "value_pool.hpp"
@@ -377,22 +378,17 @@ class OccupancyMap {
   /// touches nothing but `b`, so different bricks may be updated from different threads at once.
   std::size_t update_brick(Brick& b, const VoxelMask& mask, float delta) {
     prepare_values(b);  // a compacted (or new, empty) brick: give it its value array first
-    float* values = b.values;
-    const float fresh = clamp(0.0f + delta);  // a voxel seen for the first time
-    const bool up = delta >= 0, down = delta <= 0;
-    std::size_t added = 0;
+    const detail::ValueUpdate u{delta, clamp(0.0f + delta), params_.clamp_min, params_.clamp_max};
+#if KNNOCC_AVX2_LANES
+    if (detail::cpu_has_avx2())  // the same updates, eight voxels at a time
+      detail::update_values_avx2(b.values, mask.w.data(), b.known.w.data(), mask.w.size(), u);
+    else
+#endif
+      detail::update_values_scalar(b.values, mask.w.data(), b.known.w.data(), mask.w.size(), u);
+    std::size_t added = 0;  // voxels seen for the first time
     for (std::size_t j = 0; j < mask.w.size(); ++j) {
-      const std::uint64_t known = b.known.w[j];
-      for (std::uint64_t m = mask.w[j]; m; m &= m - 1) {
-        const int bit = __builtin_ctzll(m);
-        float& v = values[j * 64 + static_cast<std::size_t>(bit)];
-        if (!((known >> bit) & 1))
-          v = fresh;
-        else if (!((up && v >= params_.clamp_max) || (down && v <= params_.clamp_min)))
-          v = clamp(v + delta);  // OctoMap's early abort at the bound, else add and clamp
-      }
-      added += static_cast<std::size_t>(detail::popcount64(mask.w[j] & ~known));
-      b.known.w[j] = known | mask.w[j];
+      added += static_cast<std::size_t>(detail::popcount64(mask.w[j] & ~b.known.w[j]));
+      b.known.w[j] |= mask.w[j];
     }
     return added;
   }

@@ -1,10 +1,13 @@
 // OccupancyMap: clamping, iteration, coarse queries, compaction, change detection, key types.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <map>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include <knnocc/map/occupancy_map.hpp>
@@ -87,7 +90,10 @@ TEST_CASE("map.brick_value_updates_match_voxel_by_voxel") {
   // at, beside and beyond the clamping bounds, signed zeros, unknown voxels, masks from empty to
   // full, deltas of both signs and zero, bounds on either side of zero and at zero.
 #if KNNOCC_AVX2_LANES
-  if (!knnocc::detail::cpu_has_avx2()) return;
+  if (!knnocc::detail::cpu_has_avx2()) {
+    MESSAGE("update_values_avx2: not tested, this CPU has no AVX2");
+    return;
+  }
   knnocc::test::Rng rng(61);
   const std::vector<std::pair<float, float>> bounds = {
       {-2.00002789f, 3.51103067f}, {-1.f, 0.f}, {0.f, 1.f}, {-0.f, 2.f}};
@@ -147,6 +153,8 @@ TEST_CASE("map.brick_value_updates_match_voxel_by_voxel") {
       }
     }
   MESSAGE(updated << " voxel updates compared");
+#else
+  MESSAGE("update_values_avx2: not built here (no x86-64 AVX2 code path)");
 #endif
 }
 

@@ -7,7 +7,10 @@
 // takes clamp(v + delta). The eight voxels of a mask byte go through the same float addition and
 // the same comparisons, in vector form, and the voxels outside the mask keep their values. The
 // clamp is two compare-and-blends like the scalar `v < min ? min : v > max ? max : v` (min/max
-// instructions would differ on signed zeros). The known bits are the caller's to update.
+// instructions would differ on signed zeros). The arithmetic runs on all eight floats of the
+// byte, masked voxels or not; the stores keep the unmasked ones bit for bit (a fresh brick's
+// unused values may be anything, so with floating-point traps enabled, which knnocc never does,
+// that arithmetic could trap). The known bits are the caller's to update.
 
 #include <cstddef>
 #include <cstdint>

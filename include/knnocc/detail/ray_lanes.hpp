@@ -89,15 +89,18 @@ inline double end_margin(double length_voxels) { return 1e-5 * length_voxels + 1
 
 /// Whether the walk of `ray` (of float length `length`) provably ends on its end voxel after
 /// exactly steps_to_end steps, never earlier by its length: true when along every axis the end
-/// point lies more than end_margin() voxels inside its voxel. Why that suffices: the walk's line,
-/// origin + t * (float direction), is at t = length within about 5e-7 * length of the end point
-/// (float direction, norm and differences each err by under 2^-24 relative), and its border
-/// crossings t_max err by far less (double sums). So at t = length the walk has crossed, along
-/// each axis, exactly the borders between the origin's voxel and the end voxel and no other:
-/// steps_to_end crossings lie below the length, and after any earlier step the next crossing,
-/// which the length test compares, is one of them. Then no step before steps_to_end can end the
-/// walk. The margin is 20 times that error, plus 1e-3 voxel; a test walks rays 0-40 float steps
-/// from borders and checks the claim on every ray it flags.
+/// point lies more than end_margin() voxels inside its voxel. Why that suffices: along each axis
+/// the walk crosses a border where origin + t * (float direction) meets it, and at t = length
+/// that line is within 5e-7 * length of the end point (a loose bound: the float differences,
+/// norm and division each err by under 2^-24 relative; the norm's error largely cancels). The
+/// rest errs by far less: the float half-voxel of the first border (1.5e-8 voxel), the double
+/// sums of t_delta, and the key rounding. So at t = length the walk has crossed, along each axis,
+/// exactly the borders between the origin's voxel and the end voxel and no other: steps_to_end
+/// crossings lie below the length, and after any earlier step the next crossing, which the
+/// length test compares, is one of them, so no step before steps_to_end ends the walk. The margin
+/// is 20 times that loose bound, plus 1e-3 voxel. If a flagged walk were not on its end voxel
+/// after steps_to_end steps it would still end exactly: every later step is tested. A test walks
+/// rays 0-40 float steps from borders and checks the claim on every ray it flags.
 template <class Key>
 bool end_point_clear(const RayFan& fan, const RayEnd& ray, double length) {
   const double margin = end_margin(length * fan.inv_resolution);

@@ -341,7 +341,7 @@ class ScanInserter {
 #if KNNOCC_AVX2_LANES
       // Chunks of contiguous Point3f without max_range: the keys eight points at a time.
       if constexpr (Chunk && !Rated && contiguous_point3f<It>) {
-        if (max_range < 0.0 && detail::cpu_has_avx2()) {
+        if (max_range < 0.0 && n >= 8 && detail::cpu_has_avx2()) {
           const Point3f* p = &*first;
           std::size_t i = 0;
           for (; i + 8 <= n; i += 8) {

@@ -15,7 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "ray_lanes.hpp"  // KNNOCC_AVX2_LANES, cpu_has_avx2
+#include "simd_support.hpp"
 
 namespace knnocc::detail {
 

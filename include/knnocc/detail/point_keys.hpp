@@ -11,7 +11,7 @@
 #include <cstdint>
 
 #include "../core/point3.hpp"
-#include "ray_lanes.hpp"  // KNNOCC_AVX2_LANES, cpu_has_avx2
+#include "simd_support.hpp"
 
 namespace knnocc::detail {
 

@@ -29,12 +29,7 @@
 #include "../core/config.hpp"
 #include "../raycast/dda.hpp"
 
-#if !defined(KNNOCC_NO_SIMD) && (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__)
-#define KNNOCC_AVX2_LANES 1
-#include <immintrin.h>
-#else
-#define KNNOCC_AVX2_LANES 0
-#endif
+#include "simd_support.hpp"
 
 namespace knnocc::detail {
 
@@ -203,15 +198,6 @@ std::size_t walk_linear_rays_scalar(Next& next, std::uint64_t* bits) {
 #if KNNOCC_AVX2_LANES
 
 #define KNNOCC_TARGET_AVX2 __attribute__((target("avx2,bmi2")))
-
-inline bool cpu_has_avx2() {
-#if defined(__AVX2__) && defined(__BMI2__)
-  return true;
-#else
-  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi2");
-  return has;
-#endif
-}
 
 // setup_linear_ray() for eight rays at once: setup_walk()'s float and double operations in the
 // same order (square root, divisions and conversions are correctly rounded in SIMD as in scalar

@@ -101,8 +101,9 @@ TEST_CASE("map.brick_value_updates_match_voxel_by_voxel") {
   std::uniform_real_distribution<float> u(-4.f, 4.f);
   std::uniform_int_distribution<int> pick(0, 10);
   std::size_t updated = 0;
-  for (const auto& [lo, hi] : bounds)
+  for (const auto& bound : bounds)
     for (const float delta : deltas) {
+      const float lo = bound.first, hi = bound.second;  // no structured binding: CAPTURE below
       const knnocc::detail::ValueUpdate up{delta, std::min(std::max(0.f + delta, lo), hi), lo, hi};
       for (int round = 0; round < 200; ++round) {
         std::vector<float> a(512);

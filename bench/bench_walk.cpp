@@ -1,7 +1,8 @@
 // bench_walk: what the insertion's two low-level costs are on this machine.
-//   1. The ray walks into a dense bitmap, per voxel visited: scalar, four AVX2 lanes, eight
-//      AVX-512 lanes (those the CPU has), on rays from one origin to random points of a sphere
-//      shell (lengths 0.5-1 x R at 0.05 m; R = 4.8 m gives ~108 voxels per ray, an L2-sized box).
+//   1. The ray walks into a dense bitmap, per voxel visited: scalar, four AVX2 lanes, two groups
+//      of eight AVX-512 lanes (those the CPU has), on rays from one origin to random points of a
+//      sphere shell (lengths 0.5-1 x R at 0.05 m; R = 4.8 m gives ~108 voxels per ray, an L2-sized
+//      box).
 //   2. A fresh page: the cost per 4 KB of first touching 64 MB of new anonymous memory, with 4 KB
 //      pages and with MADV_HUGEPAGE (Linux; what detail/huge_pages.hpp relies on).
 //
@@ -63,10 +64,10 @@ void walks(double length, int n_rays) {
   for (int variant = 0; variant < 3; ++variant) {
     const char* name = variant == 0   ? "scalar"
                        : variant == 1 ? "AVX2, 4 lanes"
-                                      : "AVX-512, 8 lanes";
+                                      : "AVX-512, 2x8 lanes";
 #if KNNOCC_AVX2_LANES
     if ((variant == 1 && !detail::cpu_has_avx2()) || (variant == 2 && !detail::cpu_has_avx512())) {
-      std::printf("  %-17s not supported by this CPU\n", name);
+      std::printf("  %-18s not supported by this CPU\n", name);
       continue;
     }
 #else
@@ -76,10 +77,8 @@ void walks(double length, int n_rays) {
     std::size_t visits = 0;
     for (int rep = 0; rep < 5; ++rep) {
       std::size_t i = 0;
-      auto next = [&](detail::LinearRay& r) {
-        if (i == linear.size()) return false;
-        r = linear[i++];
-        return true;
+      auto next = [&]() -> const detail::LinearRay* {
+        return i == linear.size() ? nullptr : &linear[i++];
       };
       const double t0 = bench::now();
       if (variant == 0) visits = detail::walk_linear_rays_scalar(next, bitmap.words());
@@ -89,7 +88,7 @@ void walks(double length, int n_rays) {
 #endif
       best = std::min(best, bench::now() - t0);
     }
-    std::printf("  %-17s %.3f ns per voxel visited (%.1f visits per ray, best of 5)\n", name,
+    std::printf("  %-18s %.3f ns per voxel visited (%.1f visits per ray, best of 5)\n", name,
                 best * 1e9 / static_cast<double>(visits),
                 static_cast<double>(visits) / static_cast<double>(linear.size()));
   }

@@ -128,8 +128,8 @@ TEST_CASE("insert_threads.scan_dat") {
 TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
   // Rays of every kind through one box: random, axis-aligned, planar, exact diagonals through
   // voxel corners (ties), one-voxel and zero-length ones, negative coordinates. Every walk
-  // insert_point_cloud may use (four rays at once on AVX2 machines, eight on AVX-512 ones) and
-  // the one-ray walk against compute_ray_keys, bit for bit and visit for visit.
+  // insert_point_cloud may use (four lanes on AVX2 machines, two groups of eight on AVX-512
+  // ones) and the one-ray walk against compute_ray_keys, bit for bit and visit for visit.
   knnocc::test::Rng rng(5);
   for (const double res : {0.1, 0.5, 0.07}) {
     CAPTURE(res);
@@ -187,12 +187,14 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
     }
     box.reshape(base, size);
     const std::size_t words = static_cast<std::size_t>((size[0] * size[1] * size[2] + 63) / 64);
-    // Chunks of 7 and 13 rays: lanes, refills and the scalar drain all happen in every chunk (four
-    // lanes, and eight in the longer chunks), and a voxel missed by one ray is rarely hidden by
-    // another ray of the same chunk.
+    // Chunks of 7, 13 and 41 rays: four lanes refill and drain on the scalar walk in every chunk;
+    // sixteen lanes park from the start in the short chunks and refill and park in the long ones;
+    // and a voxel missed by one ray is rarely hidden by another ray of the same chunk.
     std::size_t walked = 0, clear = 0;
     for (std::size_t first = 0, chunk = 7; first < rays.size();
-         first += chunk, chunk = chunk == 7 ? 13 : 7) {
+         first += chunk, chunk = chunk == 7    ? 13
+                                 : chunk == 13 ? 41
+                                               : 7) {
       std::vector<knnocc::detail::LinearRay> linear;
       std::vector<std::uint64_t> expected(words, 0);
       std::size_t expected_visits = 0;
@@ -207,7 +209,8 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
         r.index = box.index(w.origin[0], w.origin[1], w.origin[2]);
         r.end_index = box.index(w.end[0], w.end[1], w.end[2]);
         for (int a = 0; a < 3; ++a) r.stride[a] = w.step[a] * box.stride(a);
-        // The four-lane walk skips the end tests of a clear end as in ScanInserter.
+        // The lane walks end a ray with a clear end by its step count (four lanes: test only its
+        // last step), as in ScanInserter.
         const std::int32_t ko[3] = {w.origin[0], w.origin[1], w.origin[2]};
         const std::int64_t stride[3] = {box.stride(0), box.stride(1), box.stride(2)};
         const knnocc::detail::RayFan fan(grid, rays[i].first, ko, base, stride);
@@ -219,15 +222,13 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
         for (const OcKey& k : keys[i])
           knnocc::detail::set_bit(expected.data(), box.index(k[0], k[1], k[2]));
       }
-      // Every walk this CPU can run: 0 scalar, 1 the dispatched one, 2 four AVX2 lanes, 3 eight
+      // Every walk this CPU can run: 0 scalar, 1 the dispatched one, 2 the AVX2 lanes, 3 the
       // AVX-512 lanes.
       for (int variant = 0; variant < 4; ++variant) {
         std::vector<std::uint64_t> bits(words, 0);
         std::size_t next = 0;
-        auto source = [&](knnocc::detail::LinearRay& r) {
-          if (next == linear.size()) return false;
-          r = linear[next++];
-          return true;
+        auto source = [&]() -> const knnocc::detail::LinearRay* {
+          return next == linear.size() ? nullptr : &linear[next++];
         };
         std::size_t visits = 0;
         if (variant == 0) {
@@ -257,9 +258,8 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
   const auto tested = [](bool has) {
     return std::string(has ? "tested" : "not supported by this CPU");
   };
-  MESSAGE("four-lane AVX2 walk: " << tested(knnocc::detail::cpu_has_avx2())
-                                  << "; eight-lane AVX-512 walk: "
-                                  << tested(knnocc::detail::cpu_has_avx512()));
+  MESSAGE("AVX2 lane walk: " << tested(knnocc::detail::cpu_has_avx2()) << "; AVX-512 lane walk: "
+                             << tested(knnocc::detail::cpu_has_avx512()));
 #endif
 }
 
@@ -363,7 +363,7 @@ struct StepCounter {
 }  // namespace
 
 TEST_CASE("insert_threads.clear_end_points_end_on_their_voxel") {
-  // end_point_clear() lets the four-lane walk drop the end tests of all but a ray's last step.
+  // end_point_clear() lets the lane walks end a ray by its step count, with no end test at all.
   // Its claim, checked on the one-ray walk: a flagged ray ends on its end voxel after exactly
   // steps_to_end steps, not earlier by its length and not past the voxel. The end points lie 0-40
   // float steps from a voxel border along one to three axes, where some rays do end otherwise

@@ -6,19 +6,29 @@
 // voxel is a bit index too. walk_linear_rays() sets the bit of every voxel each ray visits.
 //
 // The scalar walk spends most of its time on one branch: which axis steps next, a coin flip for
-// the CPU's predictor. On x86-64 CPUs with AVX2 (checked at run time) four rays walk at once, one
-// per 64-bit lane, with walk_ray()'s comparisons in branch-free form: the same comparisons on the
-// same doubles, so exactly the same voxels; CPUs with AVX-512F walk eight rays at once with the
-// same comparisons (KNNOCC_NO_AVX512 keeps them on four lanes). A lane whose ray ends takes the
-// next ray of the stream; when the stream runs dry the remaining rays finish on the scalar walk.
-// The four-lane walk tests for ends only in the steps where a lane can end: the last one for a
-// ray whose end point lies clear of its voxel's borders (end_point_clear, nearly every ray), the
-// last four otherwise (unchecked_steps); the eight-lane walk still tests at every step. The set-up
-// of the rays (setup_walk) goes eight at a time on AVX2 CPUs. Precondition of the vector paths: a
-// box of fewer than 2^16 + 64 voxels per edge (ScanInserter's kDenseMaxEdge), which bounds both a
-// ray's rounding error (unchecked_steps) and the bit indices converted through doubles in the
-// set-up. Elsewhere (no AVX2, other architectures, or KNNOCC_NO_SIMD defined) everything runs on
-// the scalar code, with the same results.
+// the CPU's predictor. On x86-64 CPUs with AVX2 (checked at run time) rays walk several at once,
+// one per 64-bit lane, with walk_ray()'s comparisons in branch-free form: the same comparisons on
+// the same doubles, so exactly the same voxels. A lane whose ray ends takes the next ray of the
+// stream.
+//   - AVX2: four lanes. They test for ends only in the steps where a lane can end: the last one
+//     for a ray whose end point lies clear of its voxel's borders (end_point_clear, nearly every
+//     ray), the last four otherwise (unchecked_steps). When the stream runs dry the remaining
+//     rays finish on the scalar walk.
+//   - AVX-512F: two groups of eight lanes that step in turn, so that one group's step (a chain of
+//     dependent compare, mask and add operations) fills the other's latency. A lane ends by a
+//     countdown with no end test at all: a ray with a clear end stands on its end voxel after
+//     exactly steps_to_end steps and not before; any other ray takes its unchecked_steps in the
+//     lane and the rest on the scalar walk. When the stream runs dry a lane is parked on a voxel
+//     already marked (zero strides) until every lane is done. KNNOCC_NO_AVX512 keeps AVX-512
+//     CPUs on the four lanes.
+// The set-up of the rays (setup_walk) goes eight at a time on AVX2 CPUs. Precondition of the
+// vector paths: a box of fewer than 2^16 + 64 voxels per edge (ScanInserter's kDenseMaxEdge),
+// which bounds both a ray's rounding error (unchecked_steps) and the bit indices converted
+// through doubles in the set-up. Elsewhere (no AVX2, other architectures, or KNNOCC_NO_SIMD
+// defined) everything runs on the scalar code, with the same results.
+//
+// Ray streams: next() returns a pointer to the next ray (valid until the following call), or
+// nullptr when there are no more.
 
 #include <algorithm>
 #include <cstddef>
@@ -93,9 +103,10 @@ inline double end_margin(double length_voxels) { return 1e-5 * length_voxels + 1
 /// exactly the borders between the origin's voxel and the end voxel and no other: steps_to_end
 /// crossings lie below the length, and after any earlier step the next crossing, which the
 /// length test compares, is one of them, so no step before steps_to_end ends the walk. The margin
-/// is 20 times that loose bound, plus 1e-3 voxel. If a flagged walk were not on its end voxel
-/// after steps_to_end steps it would still end exactly: every later step is tested. A test walks
-/// rays 0-40 float steps from borders and checks the claim on every ray it flags.
+/// is 20 times that loose bound, plus 1e-3 voxel. After steps_to_end steps, then, the walk has
+/// crossed exactly those borders and stands on the end voxel, which ends it: the lane walks end a
+/// flagged ray by its step count alone. A test walks rays 0-40 float steps from borders and checks
+/// the claim on every ray it flags.
 template <class Key>
 bool end_point_clear(const RayFan& fan, const RayEnd& ray, double length) {
   const double margin = end_margin(length * fan.inv_resolution);
@@ -163,7 +174,18 @@ inline std::int64_t unchecked_steps(const WalkState& s) {
   return s.steps_to_end > 4 ? s.steps_to_end - 4 : 0;
 }
 
-// What a lane walk keeps per lane outside the vector registers.
+/// The one-ray-at-a-time walk.
+template <class Next>
+std::size_t walk_linear_rays_scalar(Next& next, std::uint64_t* bits) {
+  std::size_t visits = 0;
+  while (const LinearRay* r = next()) {
+    set_bit(bits, r->index);  // the origin voxel
+    visits += 1 + finish_linear_ray(*r, bits);
+  }
+  return visits;
+}
+
+// What the four-lane walk keeps per lane outside the vector registers.
 template <int Lanes>
 struct LaneBook {
   std::int64_t iteration = 0;  // steps taken by every lane
@@ -182,18 +204,6 @@ struct LaneBook {
     return s - iteration;
   }
 };
-
-/// The one-ray-at-a-time walk. next(ray) fills the next ray and returns false when none is left.
-template <class Next>
-std::size_t walk_linear_rays_scalar(Next& next, std::uint64_t* bits) {
-  std::size_t visits = 0;
-  LinearRay r;
-  while (next(r)) {
-    set_bit(bits, r.index);  // the origin voxel
-    visits += 1 + finish_linear_ray(r, bits);
-  }
-  return visits;
-}
 
 #if KNNOCC_AVX2_LANES
 
@@ -310,6 +320,8 @@ KNNOCC_TARGET_AVX2 void setup_linear_rays8(const RayFan& fan, const RayEnd* rays
   }
 }
 
+// ---- four lanes: AVX2 --------------------------------------------------------------------------
+//
 // Four rays, one per 64-bit lane. The lengths and end voxels are needed only by the steps that
 // may end a lane; they are vectors too, blended in on a refill like the rest: kept as arrays
 // written lane by lane, their 32-byte reload after each refill waited for the 8-byte stores
@@ -408,13 +420,12 @@ KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* 
   v.index = v.s0 = v.s1 = v.s2 = v.end = _mm256_setzero_si256();
   LaneBook<kLanes> book;
   std::size_t visits = 0;
-  LinearRay r;
   int loaded = 0;
-  for (; loaded < kLanes && next(r); ++loaded) {
-    set_bit(bits, r.index);  // the origin voxel
+  for (const LinearRay* r; loaded < kLanes && (r = next()); ++loaded) {
+    set_bit(bits, r->index);  // the origin voxel
     ++visits;
-    put_lane(v, loaded, r);
-    book.load(loaded, r);
+    put_lane(v, loaded, *r);
+    book.load(loaded, *r);
   }
   if (loaded < kLanes) {  // too few rays: the scalar walk
     for (int l = 0; l < loaded; ++l) visits += finish_linear_ray(get_lane(v, l, book.due[l]), bits);
@@ -441,9 +452,9 @@ KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* 
       // ray's origin voxel, so the marking below covers it like the others.
       for (unsigned m = done; m; m &= m - 1) {
         const int l = __builtin_ctz(m);
-        if (next(r)) {
-          put_lane(v, l, r);
-          book.load(l, r);
+        if (const LinearRay* r = next()) {
+          put_lane(v, l, *r);
+          book.load(l, *r);
           done &= ~(1u << l);
         } else {  // the stream ran dry: the rays still walking finish one at a time
           for (unsigned live = ~done & 0xfu; live; live &= live - 1) {
@@ -463,15 +474,15 @@ KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* 
 
 #undef KNNOCC_TARGET_AVX2
 
-// ---- eight lanes: AVX-512 ----------------------------------------------------------------------
+// ---- two groups of eight lanes: AVX-512 --------------------------------------------------------
 //
-// The same walk on eight rays, one per lane of a 512-bit register, with walk_ray()'s comparisons
-// as mask registers (compare into a mask, add under the mask): the same operations on the same
-// doubles as the four-lane walk, so again exactly walk_ray()'s voxels. Chosen at run time where
-// the CPU has AVX-512F: 0.91 against 1.14 ns per voxel for the four-lane walk of the time (before
-// its unchecked steps), on 108-voxel rays in an L2-sized box, measured on an AMD EPYC with
-// AVX-512 (bench_walk); not measured again since. Packets of eight rays walking in lock step
-// (no per-ray refill) were measured too: slower, lanes idle while the longest ray finishes.
+// walk_ray()'s comparisons as mask registers (compare into a mask, add under the mask): the same
+// operations on the same doubles as the four lanes. Measured on an AMD EPYC (Zen 5) with TUM's
+// rays at 0.05 m (62 M visits): one group of eight stepping alone waits on its own chain, 17.5
+// cycles a step against 7.6 per group with two groups in turn; with the countdown in place of the
+// per-step end test the whole walk took 0.72 of the time of the one-group eight-lane walk before
+// it. Two groups of four lanes with the countdown did not gain on the four-lane walk above: their
+// 22 vectors do not fit AVX2's 16 registers.
 
 #define KNNOCC_TARGET_AVX512 __attribute__((target("avx512f,avx2,bmi2")))
 // GCC 12's AVX-512 intrinsics pass a deliberately undefined register (_mm512_undefined_*) and
@@ -491,143 +502,226 @@ inline bool cpu_has_avx512() {
 #endif
 }
 
-struct RayLanes8 {
-  __m512d t0, t1, t2;  // next border crossing per axis
-  __m512d d0, d1, d2;  // between two borders per axis
-  __m512d length;
-  __m512i index, end;  // bit of the current and of the end voxel
-  __m512i s0, s1, s2;  // bit offset of a step per axis
+namespace avx512_lanes {
+
+constexpr int kWidth = 8;
+
+/// The steps a ray takes in a lane: all of them, onto its end voxel, for a clear end; else its
+/// unchecked steps (0: the scalar walk takes the whole ray).
+inline std::int64_t lane_steps(const LinearRay& r) {
+  return r.clear_end ? r.state.steps_to_end : unchecked_steps(r.state);
+}
+
+/// What a lane walk keeps per lane outside the vector registers: for the rays without a clear
+/// end, what the scalar walk needs once the lane has taken their unchecked steps.
+template <int Lanes>
+struct LaneTails {
+  unsigned unclear = 0;  // bit l: lane l's ray goes on on the scalar walk when its count is out
+  double length[Lanes];
+  std::int64_t end_index[Lanes];
+  std::int64_t steps_left[Lanes];  // steps_to_end after the lane's steps
+
+  void load(int l, const LinearRay& r, std::int64_t steps) {
+    if (r.clear_end) {
+      unclear &= ~(1u << l);
+      return;
+    }
+    unclear |= 1u << l;
+    length[l] = r.state.length;
+    end_index[l] = r.end_index;
+    steps_left[l] = r.state.steps_to_end - steps;
+  }
+  bool unclear_lane(int l) const { return (unclear >> l) & 1u; }
 };
 
-KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void put_lane8(RayLanes8& v, int l, const LinearRay& r) {
+/// A lane's stepping state, read out of the vector registers.
+struct LaneState {
+  double t_max[3], t_delta[3];
+  std::int64_t index, stride[3];
+};
+
+/// The ray of an unclear lane whose count ran out, ready for finish_linear_ray().
+template <int Lanes>
+LinearRay tail_ray(const LaneTails<Lanes>& tails, int l, const LaneState& s) {
+  LinearRay r;
+  for (int a = 0; a < 3; ++a) {
+    r.state.t_max[a] = s.t_max[a];
+    r.state.t_delta[a] = s.t_delta[a];
+    r.stride[a] = s.stride[a];
+  }
+  r.state.length = tails.length[l];
+  r.state.steps_to_end = tails.steps_left[l];
+  r.index = s.index;
+  r.end_index = tails.end_index[l];
+  return r;
+}
+
+/// A parked lane: it stays on `voxel` (already marked) and its count never runs out.
+inline LinearRay parked_ray(std::int64_t voxel) {
+  LinearRay r;
+  for (int a = 0; a < 3; ++a) {
+    r.state.t_max[a] = std::numeric_limits<double>::infinity();
+    r.state.t_delta[a] = 0.0;
+    r.stride[a] = 0;
+  }
+  r.state.length = 0.0;
+  r.state.steps_to_end = 0;
+  r.index = voxel;
+  r.end_index = voxel;
+  return r;
+}
+inline constexpr std::int64_t kParkedSteps = -1;  // counts down, never reaches 0
+
+struct Group {
+  __m512d t0, t1, t2;  // next border crossing per axis
+  __m512d d0, d1, d2;  // between two borders per axis
+  __m512i index;       // bit of the current voxel
+  __m512i s0, s1, s2;  // bit offset of a step per axis
+  __m512i count;       // lane steps left
+};
+
+KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE Group empty_group() {
+  Group g;
+  g.t0 = g.t1 = g.t2 = g.d0 = g.d1 = g.d2 = _mm512_setzero_pd();
+  g.index = g.s0 = g.s1 = g.s2 = g.count = _mm512_setzero_si512();
+  return g;
+}
+
+KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void put(Group& g, int l, const LinearRay& r,
+                                                   std::int64_t steps) {
   const auto m = static_cast<__mmask8>(1u << l);
-  v.t0 = _mm512_mask_mov_pd(v.t0, m, _mm512_set1_pd(r.state.t_max[0]));
-  v.t1 = _mm512_mask_mov_pd(v.t1, m, _mm512_set1_pd(r.state.t_max[1]));
-  v.t2 = _mm512_mask_mov_pd(v.t2, m, _mm512_set1_pd(r.state.t_max[2]));
-  v.d0 = _mm512_mask_mov_pd(v.d0, m, _mm512_set1_pd(r.state.t_delta[0]));
-  v.d1 = _mm512_mask_mov_pd(v.d1, m, _mm512_set1_pd(r.state.t_delta[1]));
-  v.d2 = _mm512_mask_mov_pd(v.d2, m, _mm512_set1_pd(r.state.t_delta[2]));
-  v.length = _mm512_mask_mov_pd(v.length, m, _mm512_set1_pd(r.state.length));
-  v.index = _mm512_mask_mov_epi64(v.index, m, _mm512_set1_epi64(r.index));
-  v.end = _mm512_mask_mov_epi64(v.end, m, _mm512_set1_epi64(r.end_index));
-  v.s0 = _mm512_mask_mov_epi64(v.s0, m, _mm512_set1_epi64(r.stride[0]));
-  v.s1 = _mm512_mask_mov_epi64(v.s1, m, _mm512_set1_epi64(r.stride[1]));
-  v.s2 = _mm512_mask_mov_epi64(v.s2, m, _mm512_set1_epi64(r.stride[2]));
+  g.t0 = _mm512_mask_mov_pd(g.t0, m, _mm512_set1_pd(r.state.t_max[0]));
+  g.t1 = _mm512_mask_mov_pd(g.t1, m, _mm512_set1_pd(r.state.t_max[1]));
+  g.t2 = _mm512_mask_mov_pd(g.t2, m, _mm512_set1_pd(r.state.t_max[2]));
+  g.d0 = _mm512_mask_mov_pd(g.d0, m, _mm512_set1_pd(r.state.t_delta[0]));
+  g.d1 = _mm512_mask_mov_pd(g.d1, m, _mm512_set1_pd(r.state.t_delta[1]));
+  g.d2 = _mm512_mask_mov_pd(g.d2, m, _mm512_set1_pd(r.state.t_delta[2]));
+  g.index = _mm512_mask_mov_epi64(g.index, m, _mm512_set1_epi64(r.index));
+  g.s0 = _mm512_mask_mov_epi64(g.s0, m, _mm512_set1_epi64(r.stride[0]));
+  g.s1 = _mm512_mask_mov_epi64(g.s1, m, _mm512_set1_epi64(r.stride[1]));
+  g.s2 = _mm512_mask_mov_epi64(g.s2, m, _mm512_set1_epi64(r.stride[2]));
+  g.count = _mm512_mask_mov_epi64(g.count, m, _mm512_set1_epi64(steps));
 }
 
-KNNOCC_TARGET_AVX512 inline LinearRay get_lane8(const RayLanes8& v, int l,
-                                                std::int64_t steps_to_end) {
-  alignas(64) double d[7][8];
-  alignas(64) std::int64_t i[5][8];
-  const __m512d dv[7] = {v.t0, v.t1, v.t2, v.d0, v.d1, v.d2, v.length};
-  const __m512i iv[5] = {v.index, v.end, v.s0, v.s1, v.s2};
-  for (int k = 0; k < 7; ++k) _mm512_store_pd(d[k], dv[k]);
-  for (int k = 0; k < 5; ++k) _mm512_store_si512(i[k], iv[k]);
-  return LinearRay{
-      {{d[0][l], d[1][l], d[2][l]}, {d[3][l], d[4][l], d[5][l]}, d[6][l], steps_to_end},
-      i[0][l],
-      {i[2][l], i[3][l], i[4][l]},
-      i[1][l]};
+KNNOCC_TARGET_AVX512 inline LaneState get(const Group& g, int l) {
+  alignas(64) double d[6][8];
+  alignas(64) std::int64_t i[4][8];
+  const __m512d dv[6] = {g.t0, g.t1, g.t2, g.d0, g.d1, g.d2};
+  const __m512i iv[4] = {g.index, g.s0, g.s1, g.s2};
+  for (int k = 0; k < 6; ++k) _mm512_store_pd(d[k], dv[k]);
+  for (int k = 0; k < 4; ++k) _mm512_store_si512(i[k], iv[k]);
+  return LaneState{{d[0][l], d[1][l], d[2][l]},
+                   {d[3][l], d[4][l], d[5][l]},
+                   i[0][l],
+                   {i[1][l], i[2][l], i[3][l]}};
 }
 
-// step_lanes() on eight lanes; returns the lanes that ended.
-KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE unsigned step_lanes8(RayLanes8& v, __m512d& tmin) {
-  const __mmask8 lt01 = _mm512_cmp_pd_mask(v.t0, v.t1, _CMP_LT_OQ);
-  const __mmask8 lt02 = _mm512_cmp_pd_mask(v.t0, v.t2, _CMP_LT_OQ);
-  const __mmask8 lt12 = _mm512_cmp_pd_mask(v.t1, v.t2, _CMP_LT_OQ);
+KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void advance(Group& g) {
+  const __mmask8 lt01 = _mm512_cmp_pd_mask(g.t0, g.t1, _CMP_LT_OQ);
+  const __mmask8 lt02 = _mm512_cmp_pd_mask(g.t0, g.t2, _CMP_LT_OQ);
+  const __mmask8 lt12 = _mm512_cmp_pd_mask(g.t1, g.t2, _CMP_LT_OQ);
   const auto x = static_cast<__mmask8>(lt01 & lt02);
   const auto y = static_cast<__mmask8>(~lt01 & lt12);
   const auto z = static_cast<__mmask8>(~(lt02 | lt12));
-  v.t0 = _mm512_mask_add_pd(v.t0, x, v.t0, v.d0);
-  v.t1 = _mm512_mask_add_pd(v.t1, y, v.t1, v.d1);
-  v.t2 = _mm512_mask_add_pd(v.t2, z, v.t2, v.d2);
-  const __m512i stride = _mm512_mask_blend_epi64(x, _mm512_mask_blend_epi64(y, v.s2, v.s1), v.s0);
-  v.index = _mm512_add_epi64(v.index, stride);
-  tmin = _mm512_min_pd(v.t2, _mm512_min_pd(v.t1, v.t0));
-  return static_cast<unsigned>(_mm512_cmp_pd_mask(tmin, v.length, _CMP_GT_OQ) |
-                               _mm512_cmpeq_epi64_mask(v.index, v.end));
+  g.t0 = _mm512_mask_add_pd(g.t0, x, g.t0, g.d0);
+  g.t1 = _mm512_mask_add_pd(g.t1, y, g.t1, g.d1);
+  g.t2 = _mm512_mask_add_pd(g.t2, z, g.t2, g.d2);
+  const __m512i stride = _mm512_mask_blend_epi64(x, _mm512_mask_blend_epi64(y, g.s2, g.s1), g.s0);
+  g.index = _mm512_add_epi64(g.index, stride);
+  g.count = _mm512_sub_epi64(g.count, _mm512_set1_epi64(1));
 }
 
-// One store of the eight indices, then scalar shifts (BMI2's shlx masks the count itself): 20%
-// faster on an Intel Xeon than storing words and bits computed in the vector unit (1.23 against
-// 1.56 ns per visit, bench_walk, 108-voxel rays), which spent two stores and three vector
-// operations per step.
-KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void mark_lanes8(const RayLanes8& v,
-                                                           std::uint64_t* bits) {
+KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE unsigned counted_out(const Group& g) {
+  return _mm512_cmpeq_epi64_mask(g.count, _mm512_setzero_si512());
+}
+
+KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void mark(const Group& g, std::uint64_t* bits) {
   alignas(64) std::int64_t index[8];
-  _mm512_store_si512(index, v.index);
+  _mm512_store_si512(index, g.index);
   for (int l = 0; l < 8; ++l) set_bit(bits, index[l]);
 }
 
-/// walk_linear_rays_avx2() with eight lanes.
+// Lane l of the two groups (g0 holds lanes 0 .. kWidth - 1).
+KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void put_lane(Group& g0, Group& g1, int l,
+                                                        const LinearRay& r, std::int64_t steps) {
+  if (l < kWidth)
+    put(g0, l, r, steps);
+  else
+    put(g1, l - kWidth, r, steps);
+}
+
+// Fills lane l with the stream's next ray that has lane steps to take (rays without any go on the
+// scalar walk here), its origin voxel marked and its voxels counted; false when the stream is dry.
+// `marked` is then a voxel already marked.
 template <class Next>
-KNNOCC_TARGET_AVX512 std::size_t walk_linear_rays_avx512(Next& next, std::uint64_t* bits) {
-  constexpr int kLanes = 8;
-  RayLanes8 v;
-  v.t0 = v.t1 = v.t2 = v.d0 = v.d1 = v.d2 = v.length = _mm512_setzero_pd();
-  v.index = v.end = v.s0 = v.s1 = v.s2 = _mm512_setzero_si512();
-  std::int64_t iteration = 0;  // steps taken by every lane
-  std::int64_t due[kLanes];    // value of `iteration` when a lane's step countdown runs out
-  std::int64_t end[kLanes];    // scalar copies for the rare path
-  double length[kLanes];
+KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE bool fill_lane(Next& next, Group& g0, Group& g1,
+                                                         LaneTails<2 * kWidth>& tails, int l,
+                                                         std::uint64_t* bits, std::size_t& visits,
+                                                         std::int64_t& marked) {
+  while (const LinearRay* r = next()) {
+    set_bit(bits, r->index);  // the origin voxel
+    marked = r->index;
+    const std::int64_t steps = lane_steps(*r);
+    if (steps == 0) {
+      visits += 1 + finish_linear_ray(*r, bits);
+      continue;
+    }
+    // A clear end: the origin and steps - 1 voxels before the end voxel; else the origin and the
+    // lane's steps, and later what the scalar walk adds.
+    visits += static_cast<std::size_t>(r->clear_end ? steps : steps + 1);
+    put_lane(g0, g1, l, *r, steps);
+    tails.load(l, *r, steps);
+    return true;
+  }
+  return false;
+}
+
+/// Walks every ray next() yields in two groups of kWidth lanes (see the top of ray_lanes.hpp);
+/// returns the voxels visited.
+template <class Next>
+KNNOCC_TARGET_AVX512 std::size_t walk(Next& next, std::uint64_t* bits) {
+  constexpr int kLanes = 2 * kWidth;
+  Group g0 = empty_group(), g1 = empty_group();
+  LaneTails<kLanes> tails;
   std::size_t visits = 0;
-  LinearRay r;
-  int loaded = 0;
-  for (; loaded < kLanes && next(r); ++loaded) {
-    set_bit(bits, r.index);  // the origin voxel
-    ++visits;
-    put_lane8(v, loaded, r);
-    due[loaded] = r.state.steps_to_end;
-    end[loaded] = r.end_index;
-    length[loaded] = r.state.length;
-  }
-  if (loaded < kLanes) {  // too few rays: the scalar walk
-    for (int l = 0; l < loaded; ++l) visits += finish_linear_ray(get_lane8(v, l, due[l]), bits);
-    return visits;
-  }
+  std::int64_t marked = 0;
+  unsigned live = 0;  // bit l: lane l walks a ray (else it is parked)
+  for (int l = 0; l < kLanes; ++l)
+    if (fill_lane(next, g0, g1, tails, l, bits, visits, marked)) live |= 1u << l;
+  if (!live) return visits;
+  for (int l = 0; l < kLanes; ++l)
+    if (!((live >> l) & 1u)) put_lane(g0, g1, l, parked_ray(marked), kParkedSteps);
 
   for (;;) {
-    __m512d tmin;
-    unsigned ended;
-    while (!(ended = step_lanes8(v, tmin))) {
-      ++iteration;
-      mark_lanes8(v, bits);
-      visits += kLanes;
-    }
-    ++iteration;
-
-    // Rare path: the lanes that ended take the next rays of the stream; a refilled lane stands
-    // on its new ray's origin voxel, so the marking below covers it like the others.
-    alignas(64) double tm[kLanes];
-    alignas(64) std::int64_t idx[kLanes];
-    _mm512_store_pd(tm, tmin);
-    _mm512_store_si512(idx, v.index);
-    unsigned done = 0;
-    for (unsigned m = ended; m; m &= m - 1) {
-      const int l = __builtin_ctz(m);
-      if (idx[l] == end[l] || tm[l] > length[l]) done |= 1u << l;
-    }
-    for (unsigned m = done; m; m &= m - 1) {
-      const int l = __builtin_ctz(m);
-      if (next(r)) {
-        put_lane8(v, l, r);
-        due[l] = iteration + r.state.steps_to_end;
-        end[l] = r.end_index;
-        length[l] = r.state.length;
-        done &= ~(1u << l);
-      } else {  // the stream ran dry: the rays still walking finish one at a time
-        for (unsigned live = ~done & 0xffu; live; live &= live - 1) {
-          const int j = __builtin_ctz(live);
-          const LinearRay rj = get_lane8(v, j, due[j] - iteration);
-          set_bit(bits, rj.index);
-          visits += 1 + finish_linear_ray(rj, bits);
+    advance(g0);
+    advance(g1);
+    if (const unsigned out = counted_out(g0) | counted_out(g1) << kWidth) {
+      for (unsigned m = out; m; m &= m - 1) {
+        const int l = __builtin_ctz(m);
+        if (tails.unclear_lane(l)) {  // its unchecked steps are taken: the scalar walk goes on
+          const LinearRay r = tail_ray(tails, l, l < kWidth ? get(g0, l) : get(g1, l - kWidth));
+          set_bit(bits, r.index);
+          visits += finish_linear_ray(r, bits);
         }
-        return visits;
+        if (!fill_lane(next, g0, g1, tails, l, bits, visits, marked)) {
+          put_lane(g0, g1, l, parked_ray(marked), kParkedSteps);
+          live &= ~(1u << l);
+        }
       }
+      if (!live) return visits;
     }
-    mark_lanes8(v, bits);
-    visits += kLanes;
+    // A lane whose clear end came stands on its next ray's origin voxel now, or is parked.
+    mark(g0, bits);
+    mark(g1, bits);
   }
+}
+
+}  // namespace avx512_lanes
+
+/// Two groups of eight rays at once (see the top of this file).
+template <class Next>
+std::size_t walk_linear_rays_avx512(Next& next, std::uint64_t* bits) {
+  return avx512_lanes::walk(next, bits);
 }
 
 #if defined(__GNUC__) && !defined(__clang__)

@@ -789,17 +789,16 @@ class ScanInserter {
     detail::LinearRay batch[kBatch];
     std::size_t have = 0, taken = 0;
     const Ray *pos = nullptr, *stop = nullptr;
-    auto next = [&](detail::LinearRay& r) {
+    auto next = [&]() -> const detail::LinearRay* {
       if (taken == have) {
         while (pos == stop)  // an empty range just asks for the next one
-          if (!more(pos, stop)) return false;
+          if (!more(pos, stop)) return nullptr;
         have = std::min(kBatch, static_cast<std::size_t>(stop - pos));
         detail::setup_linear_rays(map_->grid(), fan, pos, have, batch);
         pos += have;
         taken = 0;
       }
-      r = batch[taken++];
-      return true;
+      return &batch[taken++];
     };
     return detail::walk_linear_rays(next, worker.miss.words());
   }

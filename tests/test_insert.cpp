@@ -389,3 +389,44 @@ TEST_CASE("insert.finite_bounds_match_a_point_loop") {
     }
   }
 }
+
+TEST_CASE("insert.scan_bitmap_grows_in_place_and_comes_back_zero") {
+  // ScanBitmap, the dense scratch: a box from kHugeBitmap on takes whole huge pages, so the
+  // growing boxes of a sequence (TUM at 0.05 m: 91 KB to 364 KB) reuse one block; and a bitmap
+  // left dirty (rows never taken) is all zero again after the next reshape, whatever its box.
+  using knnocc::detail::ScanBitmap;
+  const auto words_of = [](const std::int64_t(&size)[3]) {
+    return static_cast<std::size_t>(size[0] / 64 * size[1] * size[2]);
+  };
+  const std::int64_t lo[3] = {64, 8, 16};
+  const std::int64_t small[3] = {64, 64, 64};     // 32 KB
+  const std::int64_t medium[3] = {128, 64, 128};  // 128 KB: from here on huge pages
+  const std::int64_t large[3] = {256, 128, 96};   // 384 KB
+  ScanBitmap bitmap;
+  bitmap.reshape(lo, small);
+  const auto set_all_over = [&](const std::int64_t(&size)[3]) {
+    for (std::int64_t z = 0; z < size[2]; z += 7)
+      for (std::int64_t y = 0; y < size[1]; y += 5)
+        for (std::int64_t x = 0; x < size[0]; x += 3)
+          knnocc::detail::set_bit(bitmap.words(), bitmap.index(lo[0] + x, lo[1] + y, lo[2] + z));
+  };
+  const auto all_zero = [&](const std::int64_t(&size)[3]) {
+    const std::uint64_t* w = bitmap.words();
+    return std::all_of(w, w + words_of(size), [](std::uint64_t v) { return v == 0; });
+  };
+  set_all_over(small);  // left dirty
+  bitmap.reshape(lo, medium);
+  CHECK(all_zero(medium));
+  const std::uint64_t* block = bitmap.words();
+  set_all_over(medium);  // dirty again, then a smaller box and a larger one
+  bitmap.reshape(lo, small);
+  CHECK(all_zero(small));
+  set_all_over(small);
+  const std::size_t before = knnocc::detail::big_allocations;
+  bitmap.reshape(lo, large);
+  CHECK(all_zero(large));
+  if (KNNOCC_HUGE_PAGES) {  // the 128 KB box took a whole huge page, room for the 384 KB one
+    CHECK(bitmap.words() == block);
+    CHECK(knnocc::detail::big_allocations == before);
+  }
+}

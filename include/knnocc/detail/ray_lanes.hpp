@@ -477,12 +477,12 @@ KNNOCC_TARGET_AVX2 std::size_t walk_linear_rays_avx2(Next& next, std::uint64_t* 
 // ---- two groups of eight lanes: AVX-512 --------------------------------------------------------
 //
 // walk_ray()'s comparisons as mask registers (compare into a mask, add under the mask): the same
-// operations on the same doubles as the four lanes. Measured on an AMD EPYC (Zen 5) with TUM's
-// rays at 0.05 m (62 M visits): one group of eight stepping alone waits on its own chain, 17.5
-// cycles a step against 7.6 per group with two groups in turn; with the countdown in place of the
-// per-step end test the whole walk took 0.72 of the time of the one-group eight-lane walk before
-// it. Two groups of four lanes with the countdown did not gain on the four-lane walk above: their
-// 22 vectors do not fit AVX2's 16 registers.
+// operations on the same doubles as the four lanes. Measured on an AMD EPYC (Zen 5): one group of
+// eight stepping alone waits on its own chain, 5.1 ns a step against 2.2 ns per group with two
+// groups in turn; with the countdown in place of the per-step end test, the walk of TUM's rays at
+// 0.05 m (62 M visits) took 0.72 of the time of the one-group eight-lane walk before it. Two
+// groups of four lanes with the countdown did not gain on the four-lane walk above: their 22
+// vectors do not fit AVX2's 16 registers.
 
 #define KNNOCC_TARGET_AVX512 __attribute__((target("avx512f,avx2,bmi2")))
 // GCC 12's AVX-512 intrinsics pass a deliberately undefined register (_mm512_undefined_*) and

@@ -32,12 +32,12 @@ class ScanBitmap {
   /// multiple of 64 along x and of 8 along y and z).
   /// Keeps the memory; bits are zero already when every brick row was taken since the last use.
   void reshape(const std::int64_t (&lo)[3], const std::int64_t (&size)[3]) {
+    if (dirty_) std::fill(bits_.get(), bits_.get() + box_words(), std::uint64_t{0});  // old box
     for (int a = 0; a < 3; ++a) {
       lo_[a] = lo[a];
       n_[a] = size[a];
     }
-    const auto words = static_cast<std::size_t>(n_[0] / 64 * n_[1] * n_[2]);
-    if (dirty_) std::fill(bits_.get(), bits_.get() + used_, std::uint64_t{0});
+    const std::size_t words = box_words();
     if (capacity_ < words) {
       // Zeroed by the kernel, not by a loop: pages no ray touches cost nothing. The box of a scan
       // is mostly crossed by its rays, so large bitmaps take huge pages (kHugeBitmap).
@@ -48,7 +48,6 @@ class ScanBitmap {
       capacity_ = bits_ ? bytes / sizeof(std::uint64_t) : 0;
       if (!bits_) out_of_memory();
     }
-    used_ = words;
     dirty_ = true;  // until take_brick_row has seen every row
   }
 
@@ -93,10 +92,11 @@ class ScanBitmap {
   void mark_clean() { dirty_ = false; }
 
  private:
+  std::size_t box_words() const { return static_cast<std::size_t>(n_[0] / 64 * n_[1] * n_[2]); }
+
   using Bits = std::unique_ptr<std::uint64_t[], BigFree>;
   Bits bits_;
   std::size_t capacity_ = 0;  // words
-  std::size_t used_ = 0;      // words of the current box
   std::int64_t lo_[3] = {0, 0, 0};
   std::int64_t n_[3] = {0, 0, 0};
   bool dirty_ = false;

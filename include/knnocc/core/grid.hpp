@@ -38,9 +38,19 @@ class Grid {
     if (resolution < min_resolution)
       detail::invalid_argument("resolution " + std::to_string(resolution) +
                                " m is below the minimum of 1e-6 m (a unit mistake?)");
+    // Rounded to float through memory: GCC 12's SLP vectorizer at -O2 dropped the float round
+    // trip of static_cast<float>(step * res * 0.5) where the walks' set-up computed it per border
+    // (the border at 0.0 of a 0.05 m voxel came out 0 instead of -3.7e-10), which changed the
+    // voxels of rays ending exactly on a border.
+    const volatile float half = static_cast<float>(resolution * 0.5);
+    half_float_ = static_cast<double>(half);
   }
 
   double resolution() const { return res_; }
+
+  /// OctoMap's half-voxel in computeRayKeys, static_cast<float>(resolution * 0.5), as a double:
+  /// a voxel's borders lie at its centre -+ this in the walks' set-up.
+  double half_voxel_float() const { return half_float_; }
 
   /// Edge length of a node at tree depth d (0 = root, depth = leaf).
   double node_size(int d) const { return std::ldexp(res_, depth - d); }
@@ -107,6 +117,7 @@ class Grid {
  private:
   double res_;
   double inv_res_;
+  double half_float_ = 0.0;
 };
 
 }  // namespace knnocc

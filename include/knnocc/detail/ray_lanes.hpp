@@ -79,7 +79,7 @@ struct RayFan {
       stride[a] = box_stride[a];
       for (const int step : {-1, 1}) {  // exactly setup_walk's two statements
         double b = grid.index_to_coord(static_cast<typename Key::index_type>(ko[a]));
-        b += static_cast<float>(step * resolution * 0.5);
+        b += step > 0 ? grid.half_voxel_float() : -grid.half_voxel_float();
         border[a][step > 0] = b;
       }
     }

@@ -102,7 +102,8 @@ void setup_walk(const Grid<Key>& grid, const Point3f& origin, const Point3f& end
     step[i] = dir[i] > 0.0f ? 1 : (dir[i] < 0.0f ? -1 : 0);
     if (step[i] != 0) {
       double border = grid.index_to_coord(static_cast<typename Key::index_type>(ko[i]));
-      border += static_cast<float>(step[i] * res * 0.5);  // float half-voxel, as OctoMap
+      // OctoMap's float half-voxel, static_cast<float>(step * res * 0.5), rounded once by Grid.
+      border += step[i] > 0 ? grid.half_voxel_float() : -grid.half_voxel_float();
       s.t_max[i] = (border - static_cast<double>(o[i])) / static_cast<double>(dir[i]);
       s.t_delta[i] = res / static_cast<double>(std::fabs(dir[i]));
     } else {

@@ -1,8 +1,11 @@
 // bench_walk: what the insertion's two low-level costs are on this machine.
-//   1. The ray walks into a dense bitmap, per voxel visited: scalar, four AVX2 lanes, two groups
-//      of eight AVX-512 lanes (those the CPU has), on rays from one origin to random points of a
-//      sphere shell (lengths 0.5-1 x R at 0.05 m; R = 4.8 m gives ~108 voxels per ray, an L2-sized
-//      box).
+//   1. The ray walks into a dense scratch, per voxel visited, with bit marks and with byte marks:
+//      scalar, four AVX2 lanes, two groups of eight AVX-512 lanes over a ray stream, and AVX-512
+//      bundles of sixteen rays over RayBlocks (byte marks only; those the CPU has), on rays from
+//      one origin to random points of a sphere shell (lengths 0.5-1 x R at 0.05 m; R = 4.8 m
+//      gives ~108 voxels per ray, an L2-sized box in bits), in random order; and on the rays of a
+//      depth camera in a room, in image order, as a scan's points come (the bundles' case:
+//      neighbouring rays of nearly equal length).
 //   2. A fresh page: the cost per 4 KB of first touching 64 MB of new anonymous memory, with 4 KB
 //      pages and with MADV_HUGEPAGE (Linux; what detail/huge_pages.hpp relies on).
 //
@@ -14,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -27,7 +31,11 @@ namespace {
 
 using namespace knnocc;
 
-void walks(double length, int n_rays) {
+// camera: the rays of a depth camera (58 x 45 degrees) looking along +x in a room whose walls lie
+// `length` away along x and y and length / 2 along z, in image order (neighbouring rays next to
+// each other, as a scan's points come); else rays to random points of a sphere shell, in random
+// order.
+void walks(double length, int n_rays, bool camera) {
   const Grid<OcKey> grid(0.05);
   const Point3f o{0.01f, 0.02f, 0.03f};
   OcKey ko;
@@ -39,15 +47,33 @@ void walks(double length, int n_rays) {
     lo[a] = (ko[a] - r) / 8 * 8;
     size[a] = (2 * r + 64) / 64 * 64;
   }
-  detail::ScanBitmap bitmap;
+  detail::ScanBitmap bitmap, bytemap;
   bitmap.reshape(lo, size);
+  bytemap.reshape(lo, size, true);
   const std::int64_t stride[3] = {1, size[0], size[0] * size[1]};
   const detail::RayFan fan(grid, o, okey, lo, stride);
   std::mt19937 rng(1);
   std::normal_distribution<float> n(0, 1);
   std::uniform_real_distribution<float> u(0.5f, 1.0f);
   std::vector<detail::RayEnd> rays;
-  while (static_cast<int>(rays.size()) < n_rays) {
+  const int cols = static_cast<int>(std::sqrt(n_rays * 4.0 / 3.0)), rows = n_rays / cols;
+  for (int v = 0; camera && v < rows; ++v)
+    for (int c = 0; c < cols; ++c) {
+      const double d[3] = {1.0, std::tan((c / (cols - 1.0) - 0.5) * 1.0123),
+                           std::tan((v / (rows - 1.0) - 0.5) * 0.7854)};
+      const double wall[3] = {length, length, 0.5 * length}, p[3] = {o.x, o.y, o.z};
+      double t = 1e30;
+      for (int a = 0; a < 3; ++a)
+        if (d[a] != 0.0) t = std::min(t, ((d[a] > 0 ? wall[a] : -wall[a]) - p[a]) / d[a]);
+      detail::RayEnd r;
+      r.end = {static_cast<float>(p[0] + d[0] * t), static_cast<float>(p[1] + d[1] * t),
+               static_cast<float>(p[2] + d[2] * t)};
+      OcKey k;
+      if (!grid.point_to_key(r.end, k) || k == ko) continue;
+      for (int a = 0; a < 3; ++a) r.key[a] = k[a];
+      rays.push_back(r);
+    }
+  while (!camera && static_cast<int>(rays.size()) < n_rays) {
     const float x = n(rng), y = n(rng), z = n(rng);
     const float s = static_cast<float>(length) * u(rng) / std::sqrt(x * x + y * y + z * z);
     detail::RayEnd r;
@@ -59,19 +85,38 @@ void walks(double length, int n_rays) {
   }
   std::vector<detail::LinearRay> linear(rays.size());
   detail::setup_linear_rays(grid, fan, rays.data(), rays.size(), linear.data());
-  std::printf("\nrays of %.1f-%.1f m at 0.05 m (%d rays, box %.1f MB):\n", 0.5 * length, length,
-              n_rays, double(size[0]) * size[1] * size[2] / 8e6);
-  for (int variant = 0; variant < 3; ++variant) {
-    const char* name = variant == 0   ? "scalar"
-                       : variant == 1 ? "AVX2, 4 lanes"
-                                      : "AVX-512, 2x8 lanes";
+  std::vector<std::unique_ptr<detail::RayBlock>> blocks;
+  for (std::size_t first = 0; first < rays.size(); first += detail::RayBlock::kRays) {
+    blocks.push_back(std::make_unique<detail::RayBlock>());
+    detail::setup_ray_block(grid, fan, rays.data() + first,
+                            std::min(detail::RayBlock::kRays, rays.size() - first), *blocks.back());
+  }
+  if (camera)
+    std::printf(
+        "\na depth camera's rays in a room %.1f m away at 0.05 m (%zu rays, box %.1f MB "
+        "in bits):\n",
+        length, rays.size(), double(size[0]) * size[1] * size[2] / 8e6);
+  else
+    std::printf(
+        "\nrays of %.1f-%.1f m at 0.05 m in random order (%zu rays, box %.1f MB in "
+        "bits):\n",
+        0.5 * length, length, rays.size(), double(size[0]) * size[1] * size[2] / 8e6);
+  const detail::BitMarks bits{bitmap.words()};
+  const detail::ByteMarks bytes{bytemap.bytes()};
+  for (int variant = 0; variant < 7; ++variant) {
+    const bool byte_marks = variant >= 3;
+    const int walk = byte_marks ? variant - 3 : variant;  // 0 scalar, 1 AVX2, 2 AVX-512, 3 bundles
+    static const char* const names[] = {"scalar", "AVX2, 4 lanes", "AVX-512, 2x8 lanes",
+                                        "AVX-512 bundles"};
+    char name[64];
+    std::snprintf(name, sizeof name, "%s, %s", names[walk], byte_marks ? "bytes" : "bits");
 #if KNNOCC_AVX2_LANES
-    if ((variant == 1 && !detail::cpu_has_avx2()) || (variant == 2 && !detail::cpu_has_avx512())) {
-      std::printf("  %-18s not supported by this CPU\n", name);
+    if ((walk == 1 && !detail::cpu_has_avx2()) || (walk >= 2 && !detail::cpu_has_avx512())) {
+      std::printf("  %-28s not supported by this CPU\n", name);
       continue;
     }
 #else
-    if (variant > 0) continue;
+    if (walk > 0) continue;
 #endif
     double best = 1e30;
     std::size_t visits = 0;
@@ -81,14 +126,24 @@ void walks(double length, int n_rays) {
         return i == linear.size() ? nullptr : &linear[i++];
       };
       const double t0 = bench::now();
-      if (variant == 0) visits = detail::walk_linear_rays_scalar(next, bitmap.words());
+      if (walk == 0)
+        visits = byte_marks ? detail::walk_linear_rays_scalar(next, bytes)
+                            : detail::walk_linear_rays_scalar(next, bits);
 #if KNNOCC_AVX2_LANES
-      if (variant == 1) visits = detail::walk_linear_rays_avx2(next, bitmap.words());
-      if (variant == 2) visits = detail::walk_linear_rays_avx512(next, bitmap.words());
+      if (walk == 1)
+        visits = byte_marks ? detail::walk_linear_rays_avx2(next, bytes)
+                            : detail::walk_linear_rays_avx2(next, bits);
+      if (walk == 2)
+        visits = byte_marks ? detail::avx512_stream::walk(next, bytes)
+                            : detail::avx512_stream::walk(next, bits);
+      if (walk == 3) {
+        visits = 0;
+        for (const auto& b : blocks) visits += detail::avx512_bundles::walk_block(*b, bytes);
+      }
 #endif
       best = std::min(best, bench::now() - t0);
     }
-    std::printf("  %-18s %.3f ns per voxel visited (%.1f visits per ray, best of 5)\n", name,
+    std::printf("  %-28s %.3f ns per voxel visited (%.1f visits per ray, best of 5)\n", name,
                 best * 1e9 / static_cast<double>(visits),
                 static_cast<double>(visits) / static_cast<double>(linear.size()));
   }
@@ -134,7 +189,8 @@ int main(int argc, char** argv) {
   }
   if (lengths.empty()) lengths = {4.8, 2.0};
   std::printf("bench_walk: build type '%s'\n", KNNOCC_BENCH_BUILD_TYPE);
-  for (const double l : lengths) walks(l, n_rays);
+  for (const bool camera : {true, false})
+    for (const double l : lengths) walks(l, n_rays, camera);
   fresh_pages();
   return 0;
 }

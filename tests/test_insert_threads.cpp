@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <list>
+#include <memory>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -188,8 +190,9 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
     box.reshape(base, size);
     const std::size_t words = static_cast<std::size_t>((size[0] * size[1] * size[2] + 63) / 64);
     // Chunks of 7, 13 and 41 rays: four lanes refill and drain on the scalar walk in every chunk;
-    // sixteen lanes park from the start in the short chunks and refill and park in the long ones;
-    // and a voxel missed by one ray is rarely hidden by another ray of the same chunk.
+    // sixteen stream lanes park from the start in the short chunks and refill and park in the
+    // long ones; bundles are part parked (7, 13) or take a second bundle (41); and a voxel missed
+    // by one ray is rarely hidden by another ray of the same chunk.
     std::size_t walked = 0, clear = 0;
     for (std::size_t first = 0, chunk = 7; first < rays.size();
          first += chunk, chunk = chunk == 7    ? 13
@@ -222,32 +225,81 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
         for (const OcKey& k : keys[i])
           knnocc::detail::set_bit(expected.data(), box.index(k[0], k[1], k[2]));
       }
-      // Every walk this CPU can run: 0 scalar, 1 the dispatched one, 2 the AVX2 lanes, 3 the
-      // AVX-512 lanes.
-      for (int variant = 0; variant < 4; ++variant) {
-        std::vector<std::uint64_t> bits(words, 0);
-        std::size_t next = 0;
-        auto source = [&]() -> const knnocc::detail::LinearRay* {
-          return next == linear.size() ? nullptr : &linear[next++];
-        };
-        std::size_t visits = 0;
-        if (variant == 0) {
-          visits = knnocc::detail::walk_linear_rays_scalar(source, bits.data());
-        } else if (variant == 1) {
-          visits = knnocc::detail::walk_linear_rays(source, bits.data());
+      // Every walk this CPU can run, with bit marks and with byte marks: 0 scalar, 1 the
+      // dispatched stream walk, 2 the AVX2 lanes, 3 the AVX-512 stream lanes, 4 the dispatched
+      // block walk (AVX-512 bundles with bytes), 5 the AVX-512 bundles.
+      knnocc::detail::ScanBitmap bytemap;
+      bytemap.reshape(base, size, true);
+      const auto block = std::make_unique<knnocc::detail::RayBlock>();
+      for (int variant = 0; variant < 6; ++variant)
+        for (const bool byte_marks : {false, true}) {
+          std::vector<std::uint64_t> bits(words, 0);
+          const knnocc::detail::BitMarks bit_marks{bits.data()};
+          const knnocc::detail::ByteMarks byte_marks_to{bytemap.bytes()};
+          std::size_t next = 0;
+          auto source = [&]() -> const knnocc::detail::LinearRay* {
+            return next == linear.size() ? nullptr : &linear[next++];
+          };
+          // walk(marks): the variant's walk of every ray of the chunk.
+          auto walk = [&](auto marks) -> std::size_t {
+            if (variant == 0) return knnocc::detail::walk_linear_rays_scalar(source, marks);
+            if (variant == 1) return knnocc::detail::walk_linear_rays(source, marks);
+            if (variant == 4 || variant == 5) {  // blocks of at most RayBlock::kRays rays
+              std::size_t visits = 0;
+              for (std::size_t b = 0; b < linear.size(); b += knnocc::detail::RayBlock::kRays) {
+                const std::size_t n = std::min(knnocc::detail::RayBlock::kRays, linear.size() - b);
+                for (std::size_t i = 0; i < n; ++i) block->set(i, linear[b + i]);
+                block->close(n);
 #if KNNOCC_AVX2_LANES
-        } else if (variant == 2 && knnocc::detail::cpu_has_avx2()) {
-          visits = knnocc::detail::walk_linear_rays_avx2(source, bits.data());
-        } else if (variant == 3 && knnocc::detail::cpu_has_avx512()) {
-          visits = knnocc::detail::walk_linear_rays_avx512(source, bits.data());
+                if (variant == 5)
+                  visits += knnocc::detail::avx512_bundles::walk_block(*block, marks);
+                else
 #endif
-        } else {
-          continue;
+                  visits += knnocc::detail::walk_ray_block(*block, marks);
+              }
+              return visits;
+            }
+#if KNNOCC_AVX2_LANES
+            if (variant == 2) return knnocc::detail::walk_linear_rays_avx2(source, marks);
+            return knnocc::detail::avx512_stream::walk(source, marks);
+#else
+            return 0;
+#endif
+          };
+#if KNNOCC_AVX2_LANES
+          if ((variant == 2 && !knnocc::detail::cpu_has_avx2()) ||
+              ((variant == 3 || variant == 5) && !knnocc::detail::cpu_has_avx512()))
+            continue;
+#else
+          if (variant == 2 || variant == 3 || variant == 5) continue;
+#endif
+          if (linear.empty()) continue;
+          std::size_t visits = 0;
+          if (byte_marks) {
+            visits = walk(byte_marks_to);
+            // The byte map read back as bits, and zero again, through take_brick_row.
+            std::vector<knnocc::VoxelMask> masks(static_cast<std::size_t>(bytemap.bricks(0)));
+            for (std::int64_t bz = 0; bz < bytemap.bricks(2); ++bz)
+              for (std::int64_t by = 0; by < bytemap.bricks(1); ++by) {
+                for (auto& m : masks) m.clear();
+                bytemap.take_brick_row(by, bz, masks.data());
+                for (std::int64_t bx = 0; bx < bytemap.bricks(0); ++bx)
+                  for (int v = 0; v < knnocc::kBrickVoxels; ++v)
+                    if (masks[static_cast<std::size_t>(bx)].test(v))
+                      knnocc::detail::set_bit(bits.data(),
+                                              bytemap.index(base[0] + bx * 8 + (v & 7),
+                                                            base[1] + by * 8 + ((v >> 3) & 7),
+                                                            base[2] + bz * 8 + (v >> 6)));
+              }
+            bytemap.mark_clean();
+          } else {
+            visits = walk(bit_marks);
+          }
+          CAPTURE(variant);
+          CAPTURE(byte_marks);
+          CHECK(visits == expected_visits);
+          CHECK(bits == expected);
         }
-        CAPTURE(variant);
-        CHECK(visits == expected_visits);
-        CHECK(bits == expected);
-      }
       walked += expected_visits;
     }
     MESSAGE(walked << " voxels walked at resolution " << res << ", " << clear
@@ -413,4 +465,61 @@ TEST_CASE("insert_threads.clear_end_points_end_on_their_voxel") {
   CHECK(flagged_other_end == 0);
   CHECK(other_end > 100);      // the rays the flag must leave out are there
   CHECK(flagged > rays / 10);  // and the flag is not simply always false
+}
+
+TEST_CASE("insert_threads.byte_marks_build_the_same_map") {
+  // A scan whose rays take more than 4 M steps in a box of under 4 M voxels marks its free
+  // voxels in bytes (ScanStats::byte_marks) where the CPU has AVX-512 (elsewhere bits): the same
+  // map as with bit marks (a scratch limit too small for bytes), the hashed scratch and any thread
+  // count. Points on and near the walls of a 6 m cube around the origin at 0.05 m: a box of about
+  // 130^3 voxels, rays of about 100 steps. The scan goes in chunks (a vector) and in one piece (a
+  // list), and the second scan reuses the bytes.
+  knnocc::test::Rng rng(29);
+  std::uniform_real_distribution<float> u(-3.f, 3.f);
+  std::uniform_int_distribution<int> face(0, 5);
+  std::vector<Scan> scans(2);
+  for (std::size_t s = 0; s < scans.size(); ++s) {
+    scans[s].origin = {0.013f + 0.2f * static_cast<float>(s), -0.021f, 0.034f};
+    for (int i = 0; i < 60000; ++i) {
+      Point3f p{u(rng), u(rng), u(rng)};
+      const int f = face(rng);
+      // Two in three on a wall, exactly on a voxel border (rays without a clear end); the rest
+      // inside, on the wall's plane moved by a random part of a voxel (rays with a clear end).
+      (f < 2 ? p.x : f < 4 ? p.y : p.z) = (f % 2 ? 3.f : -3.f) * (i % 3 ? 1.f : 0.99f);
+      scans[s].points.push_back(p);
+    }
+  }
+  bool avx512 = false;
+#if KNNOCC_AVX2_LANES && !defined(KNNOCC_NO_AVX512)
+  avx512 = knnocc::detail::cpu_has_avx512();
+#endif
+  auto run = [&](unsigned threads, std::size_t limit, bool listed, bool bytes_if_avx512) {
+    const bool expect_bytes = bytes_if_avx512 && avx512;
+    OccupancyMap<OcKey> map(0.05);
+    knnocc::ScanInserter<OcKey> inserter(map, {}, threads);
+    inserter.set_scratch_limit(limit);
+    Outcome<OcKey> out;
+    for (const auto& s : scans) {
+      const auto st = listed ? inserter.insert_point_cloud(
+                                   s.origin, std::list<Point3f>(s.points.begin(), s.points.end()))
+                             : inserter.insert_point_cloud(s.origin, s.points);
+      CHECK(st.byte_marks == expect_bytes);
+      CHECK(st.ray_keys > (std::size_t{4} << 20));
+      out.stats.insert(out.stats.end(), {st.ray_keys, st.occupied_voxels, st.free_voxels});
+    }
+    map.for_each_voxel([&](const OcKey& k, float v) { out.voxels.emplace_back(k.pack(), v); });
+    return out;
+  };
+  const auto bytes = run(1, kDefaultLimit, false, true);
+  REQUIRE(bytes.voxels.size() > 100000);
+  MESSAGE("byte marks: " << (avx512 ? "tested" : "not used on this CPU (no AVX-512)"));
+  // Bits: room for two bitmaps of the box (about 0.6 MB) but not for a byte map (2.2 MB).
+  CHECK(run(1, std::size_t{1} << 20, false, false) == bytes);
+  CHECK(run(1, 0, false, false) == bytes);  // hashed
+  CHECK(run(1, kDefaultLimit, true, true) == bytes);
+  for (const unsigned threads : {2u, 4u}) {
+    CAPTURE(threads);
+    CHECK(run(threads, kDefaultLimit, false, true) == bytes);
+    CHECK(run(threads, kDefaultLimit, true, true) == bytes);
+  }
 }

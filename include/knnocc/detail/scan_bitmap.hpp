@@ -1,10 +1,12 @@
 #pragma once
-// ScanBitmap: one bit per voxel of a brick-aligned box of keys, the per-scan scratch of
-// ScanInserter when a scan's box is small enough (see ScanInserter::dense_fits).
+// ScanBitmap: one bit (or one byte) per voxel of a brick-aligned box of keys, the per-scan
+// scratch of ScanInserter when a scan's box is small enough (see ScanInserter::dense_fits).
 //
-// Bit ((z - lo_z) * ny + (y - lo_y)) * nx + (x - lo_x), x fastest, so a step along an axis is a
-// constant offset (what the ray walk needs) and the 8 bits of a brick row (fixed y and z) are one
-// byte of a 64-bit word: a brick's VoxelMask is its 64 row bytes, gathered by take_brick_row().
+// Voxel ((z - lo_z) * ny + (y - lo_y)) * nx + (x - lo_x), x fastest, so a step along an axis is a
+// constant offset (what the ray walk needs). With bits, the 8 bits of a brick row (fixed y and z)
+// are one byte of a 64-bit word; with bytes (a byte is 0 or 1), the 8 bytes of a brick row are one
+// 64-bit word. Either way a brick's VoxelMask is its 64 rows, gathered by take_brick_row(). Bytes
+// cost eight times the memory but are marked by a plain store (detail/ray_lanes.hpp, ByteMarks).
 
 #include <algorithm>
 #include <cstdint>
@@ -29,21 +31,25 @@ class ScanBitmap {
   static constexpr std::size_t kHugeBitmap = std::size_t{128} << 10;
 
   /// Makes this the all-zero bitmap of the box [lo, lo + size) (lo a multiple of 8, size a
-  /// multiple of 64 along x and of 8 along y and z).
-  /// Keeps the memory; bits are zero already when every brick row was taken since the last use.
-  void reshape(const std::int64_t (&lo)[3], const std::int64_t (&size)[3]) {
+  /// multiple of 64 along x and of 8 along y and z), with a bit per voxel, or a byte if
+  /// `byte_per_voxel`. Keeps the memory; bits are zero already when every brick row was taken since
+  /// the last use.
+  void reshape(const std::int64_t (&lo)[3], const std::int64_t (&size)[3],
+               bool byte_per_voxel = false) {
     if (dirty_) std::fill(bits_.get(), bits_.get() + box_words(), std::uint64_t{0});  // old box
     for (int a = 0; a < 3; ++a) {
       lo_[a] = lo[a];
       n_[a] = size[a];
     }
+    bytes_ = byte_per_voxel;
     const std::size_t words = box_words();
     if (capacity_ < words) {
       // Zeroed by the kernel, not by a loop: pages no ray touches cost nothing. The box of a scan
       // is mostly crossed by its rays, so large bitmaps take huge pages (kHugeBitmap).
       bits_.reset();
       std::size_t bytes = words * sizeof(std::uint64_t);
-      if (KNNOCC_HUGE_PAGES && bytes >= kHugeBitmap && bytes < kHugePage) bytes = kHugePage;
+      if (KNNOCC_HUGE_PAGES && !bytes_ && bytes >= kHugeBitmap && bytes < kHugePage)
+        bytes = kHugePage;
       bits_ = Bits(static_cast<std::uint64_t*>(big_alloc_zeroed(bytes)), BigFree{bytes});
       capacity_ = bits_ ? bytes / sizeof(std::uint64_t) : 0;
       if (!bits_) out_of_memory();
@@ -54,10 +60,13 @@ class ScanBitmap {
   std::int64_t index(std::int64_t x, std::int64_t y, std::int64_t z) const {
     return ((z - lo_[2]) * n_[1] + (y - lo_[1])) * n_[0] + (x - lo_[0]);
   }
-  /// Bit offset of one voxel along axis a.
+  /// Index offset of one voxel along axis a.
   std::int64_t stride(int a) const { return a == 0 ? 1 : a == 1 ? n_[0] : n_[0] * n_[1]; }
-  /// Bit i is bit (i & 63) of word i >> 6.
+  /// Bits: voxel i is bit (i & 63) of word i >> 6.
   std::uint64_t* words() { return bits_.get(); }
+  /// Bytes: voxel i is byte i, 0 or 1.
+  std::uint8_t* bytes() { return reinterpret_cast<std::uint8_t*>(bits_.get()); }
+  bool has_bytes() const { return bytes_; }
 
   const std::int64_t* lo() const { return lo_; }
   /// Number of bricks along axis a.
@@ -65,7 +74,7 @@ class ScanBitmap {
 
   /// ORs the bits of the bricks (0..bricks(0)-1, by, bz) into masks[0..bricks(0)) and clears them.
   void take_brick_row(std::int64_t by, std::int64_t bz, VoxelMask* masks) {
-    const std::int64_t row_words = n_[0] / 64;
+    const std::int64_t row_words = n_[0] / (bytes_ ? 8 : 64);
     for (int lz = 0; lz < kBrickEdge; ++lz) {
       // The 8 rows (ly = 0..7) of this z slice are contiguous: skip them at once when empty.
       std::uint64_t* slice =
@@ -75,24 +84,40 @@ class ScanBitmap {
       if (!any) continue;
       for (int ly = 0; ly < kBrickEdge; ++ly) {
         std::uint64_t* row = slice + ly * row_words;
+        // Row (ly, lz) of a brick is bits 8 ly .. 8 ly + 7 of VoxelMask word lz.
+        const auto lz_word = static_cast<std::size_t>(lz);
+        if (bytes_) {
+          for (std::int64_t bx = 0; bx < row_words; ++bx) {
+            const std::uint64_t w = row[bx];  // one brick's row, a byte (0 or 1) per voxel
+            if (!w) continue;
+            row[bx] = 0;
+            masks[bx].w[lz_word] |= row_bits(w) << (8 * ly);
+          }
+          continue;
+        }
         for (std::int64_t wx = 0; wx < row_words; ++wx) {
           const std::uint64_t w = row[wx];  // eight bricks along x, 8 bits each
           if (!w) continue;
           row[wx] = 0;
           for (int b = 0; b < 8; ++b) {
-            // Row (ly, lz) of a brick is bits 8 ly .. 8 ly + 7 of VoxelMask word lz.
             const std::uint64_t byte = (w >> (8 * b)) & 0xff;
-            masks[wx * 8 + b].w[static_cast<std::size_t>(lz)] |= byte << (8 * ly);
+            masks[wx * 8 + b].w[lz_word] |= byte << (8 * ly);
           }
         }
       }
     }
   }
+
+  /// The 8 bytes of w, each 0 or 1, as 8 bits (byte k to bit k). Byte k times 2^(7 (8 - k)) lands
+  /// on bit 56 + k; no two of the 64 partial products share a bit, so nothing carries.
+  static std::uint64_t row_bits(std::uint64_t w) { return (w * 0x0102040810204080ull) >> 56; }
   /// Call after taking every brick row: the bitmap is all zero again.
   void mark_clean() { dirty_ = false; }
 
  private:
-  std::size_t box_words() const { return static_cast<std::size_t>(n_[0] / 64 * n_[1] * n_[2]); }
+  std::size_t box_words() const {
+    return static_cast<std::size_t>(n_[0] / (bytes_ ? 8 : 64) * n_[1] * n_[2]);
+  }
 
   using Bits = std::unique_ptr<std::uint64_t[], BigFree>;
   Bits bits_;
@@ -100,6 +125,7 @@ class ScanBitmap {
   std::int64_t lo_[3] = {0, 0, 0};
   std::int64_t n_[3] = {0, 0, 0};
   bool dirty_ = false;
+  bool bytes_ = false;
 };
 
 }  // namespace knnocc::detail

@@ -93,6 +93,9 @@ struct ScanStats {
   /// not rated) whose dense box fits goes that many points at a time, which bounds the per-point
   /// buffers; the map gets the same updates either way.
   std::size_t chunks = 0;
+  /// The walk marked free voxels in a byte per voxel rather than a bit (a scan whose dense box
+  /// has at most 4 M voxels and whose rays take at least 4 M steps; faster, the same map).
+  bool byte_marks = false;
 };
 
 template <class Key = OcKey, class Model = OctoMapModel>
@@ -127,8 +130,9 @@ class ScanInserter {
   /// Address space the dense per-scan scratch may take, all threads together (default 384 MB,
   /// two bitmaps per thread: two threads keep the boxes that fitted 256 MB when a scan had one
   /// bitmap per thread and one shared; pages no ray touches stay unmapped, so resident memory is
-  /// usually far less). A scan whose box needs more uses the hashed scratch (slower, same map);
-  /// 0 always does.
+  /// usually far less; a box marked in bytes, ScanStats::byte_marks, takes 9 bits per voxel instead
+  /// of 2 and falls back to bits when the limit is too small for bytes). A scan whose box needs
+  /// more uses the hashed scratch (slower, same map); 0 always does.
   void set_scratch_limit(std::size_t bytes) { scratch_limit_ = bytes; }
   std::size_t scratch_limit() const { return scratch_limit_; }
 
@@ -230,7 +234,8 @@ class ScanInserter {
   // One thread's scratch (separate allocations, so threads do not share cache lines).
   struct Worker {
     detail::ScanBitmap hit, miss;  // dense path: this thread's endpoints and free voxels
-    detail::FlatIndex index;       // hashed path: brick coordinate -> slot in scratch
+    std::unique_ptr<detail::RayBlock> block = std::make_unique<detail::RayBlock>();
+    detail::FlatIndex index;  // hashed path: brick coordinate -> slot in scratch
     std::vector<Scratch> scratch;
     std::size_t used = 0;
     std::uint64_t last_coord = 0;
@@ -631,6 +636,7 @@ class ScanInserter {
     steps_ = static_cast<std::size_t>(sampled * Bounds::kSample);
     if (!dense_fits()) return false;
 
+    st.byte_marks = byte_marks_;
     prepare_dense();
     const detail::RayFan fan = dense_fan();
     const std::size_t chunks = (n + chunk_points - 1) / chunk_points;
@@ -715,6 +721,16 @@ class ScanInserter {
   // of a whole voxel in t, while the float direction and length err by about 1e-6 of the ray
   // length, under 0.2 voxel for the rays of a box edge below 2^16 voxels + 64.
   static constexpr std::int64_t kDenseMaxEdge = (std::int64_t{1} << 16) + 64;
+  // Free voxels are marked in bytes, not bits, when the box has at most kByteMarkVoxels voxels
+  // (a byte map of up to 4 MB per thread, taken 2 MB at a time) and the scan walks at least
+  // kByteMarkSteps steps: a byte is marked by a plain store, where bits of neighbouring voxels
+  // wait on each other's read-modify-writes of one word (detail/ray_lanes.hpp). On TUM at 0.05 m
+  // (boxes of 0.6-3.2 M voxels, 5.2-7.6 M steps a scan) that took the insertion to 0.71 of its
+  // time. Shorter walks gain too little for the memory: TUM at 0.1 m (2.6-3.8 M steps) would
+  // have added up to 0.7 MB to a 1.8 MB peak. Larger boxes would not fit in the caches and would
+  // multiply the scratch's resident memory by eight.
+  static constexpr std::int64_t kByteMarkVoxels = std::int64_t{4} << 20;
+  static constexpr std::size_t kByteMarkSteps = std::size_t{4} << 20;
   // Scans of fewer points are collected (and bounded) on one thread: waking the others costs more.
   static constexpr std::size_t kThreadedPoints = 2 * chunk_points;
 
@@ -731,13 +747,16 @@ class ScanInserter {
       if (box_size_[a] > kDenseMaxEdge) return false;
       bits *= box_size_[a];
     }
-    // Two bitmaps per thread: free and occupied voxels.
-    const double bytes = static_cast<double>(bits) / 8 * (2 * threads_);
-    return bytes <= static_cast<double>(scratch_limit_) &&
+    // Two bitmaps per thread: occupied voxels in bits, free voxels in bytes when the box is small.
+    const double limit = static_cast<double>(scratch_limit_) / threads_;
+    byte_marks_ = detail::walks_bundles<detail::ByteMarks>() && bits <= kByteMarkVoxels &&
+                  steps_ >= kByteMarkSteps && static_cast<double>(bits) / 8 * 9 <= limit;
+    return static_cast<double>(bits) / 8 * (byte_marks_ ? 9 : 2) <= limit &&
            bits <= kDenseBitsPerStep * static_cast<std::int64_t>(steps_) + (std::int64_t{1} << 20);
   }
 
   void walk_dense(ScanStats& st) {
+    st.byte_marks = byte_marks_;
     prepare_dense();
     mark_dense(st);
     apply_dense(st);
@@ -747,7 +766,7 @@ class ScanInserter {
   void prepare_dense() {
     for (unsigned w = 0; w < threads_; ++w) {
       workers_[w]->hit.reshape(box_lo_, box_size_);
-      workers_[w]->miss.reshape(box_lo_, box_size_);
+      workers_[w]->miss.reshape(box_lo_, box_size_, byte_marks_);
     }
   }
   detail::RayFan dense_fan() const {
@@ -780,27 +799,50 @@ class ScanInserter {
   }
 
   // Walks the rays that more(pos, stop) hands out (a range at a time, false when there are no
-  // more) into the worker's miss bitmap; returns the voxels visited. Rays are set up a batch at
+  // more) into the worker's miss bitmap; returns the voxels visited. Rays are set up a RayBlock at
   // a time: independent set-ups (divisions, a square root) overlap in the CPU, and go eight at a
-  // time on AVX2 machines.
+  // time on AVX2 machines. The block is walked whole, or its rays go on as one stream with the
+  // next blocks' (detail::walks_bundles).
   template <class More>
   std::size_t walk_dense_rays(Worker& worker, const detail::RayFan& fan, More&& more) {
-    constexpr std::size_t kBatch = 16;
-    detail::LinearRay batch[kBatch];
-    std::size_t have = 0, taken = 0;
+    if (worker.miss.has_bytes())
+      return walk_dense_rays(worker, fan, more, detail::ByteMarks{worker.miss.bytes()});
+    return walk_dense_rays(worker, fan, more, detail::BitMarks{worker.miss.words()});
+  }
+  template <class More, class Marks>
+  std::size_t walk_dense_rays(Worker& worker, const detail::RayFan& fan, More& more, Marks marks) {
+    constexpr std::size_t kBlock = detail::RayBlock::kRays;
+    detail::RayBlock& block = *worker.block;
     const Ray *pos = nullptr, *stop = nullptr;
+    if (detail::walks_bundles<Marks>()) {
+      std::size_t visits = 0;
+      while (more(pos, stop))
+        for (; pos != stop; pos += block.size) {
+          detail::setup_ray_block(map_->grid(), fan, pos,
+                                  std::min(kBlock, static_cast<std::size_t>(stop - pos)), block);
+          visits += detail::walk_ray_block(block, marks);
+        }
+      return visits;
+    }
+    std::size_t taken = 0;
+    block.size = 0;
+    detail::LinearRay ray;
     auto next = [&]() -> const detail::LinearRay* {
-      if (taken == have) {
+      if (taken == block.size) {
         while (pos == stop)  // an empty range just asks for the next one
-          if (!more(pos, stop)) return nullptr;
-        have = std::min(kBatch, static_cast<std::size_t>(stop - pos));
-        detail::setup_linear_rays(map_->grid(), fan, pos, have, batch);
-        pos += have;
+          if (!more(pos, stop)) {
+            pos = stop;  // asked again once the lanes are done: still no rays
+            return nullptr;
+          }
+        detail::setup_ray_block(map_->grid(), fan, pos,
+                                std::min(kBlock, static_cast<std::size_t>(stop - pos)), block);
+        pos += block.size;
         taken = 0;
       }
-      return &batch[taken++];
+      ray = block.get(taken++);
+      return &ray;
     };
-    return detail::walk_linear_rays(next, worker.miss.words());
+    return detail::walk_linear_rays(next, marks);
   }
 
   void walk_hashed(ScanStats& st) {
@@ -1091,6 +1133,7 @@ class ScanInserter {
   std::size_t steps_ = 0;                        // sum of |end - origin|_1 over the rays
   std::int64_t key_min_[3] = {0, 0, 0}, key_max_[3] = {0, 0, 0};
   std::int64_t box_lo_[3] = {0, 0, 0}, box_size_[3] = {0, 0, 0};
+  bool byte_marks_ = false;  // the dense box marks free voxels in bytes (dense_fits)
   std::vector<std::vector<BrickUpdate>> groups_;  // touched bricks, z, y, x order overall
   std::size_t group_count_ = 0;
   std::vector<std::uint32_t> order_;  // hashed path: scratch slots in z, y, x order

@@ -7,8 +7,8 @@
 // bit per voxel (BitMarks, a read-modify-write of a 64-bit word) or one byte per voxel
 // (ByteMarks, a plain store). Bytes are what the lanes below mark fastest: rays from one origin
 // cross the same few voxels near it, and bit marks of neighbouring voxels then wait on each
-// other's stores to the same word (TUM's rays at 0.05 m: the walk alone took 0.47 of the time
-// with bytes), at eight times the memory, so ScanInserter takes bytes for small boxes only.
+// other's stores to the same word (TUM's rays at 0.05 m: the walk alone took about half the
+// time with bytes), at eight times the memory, so ScanInserter takes bytes for small boxes only.
 //
 // The scalar walk spends most of its time on one branch: which axis steps next, a coin flip for
 // the CPU's predictor. On x86-64 CPUs with AVX2 (checked at run time) rays walk several at once,
@@ -152,7 +152,7 @@ struct BitMarks {
   KNNOCC_ALWAYS_INLINE void operator()(std::int64_t i) const { set_bit(words, i); }
 };
 
-/// Marks one byte per voxel: byte i becomes 1 (ScanByteMap).
+/// Marks one byte per voxel: byte i becomes 1 (a ScanBitmap with a byte per voxel).
 struct ByteMarks {
   std::uint8_t* bytes;
   KNNOCC_ALWAYS_INLINE void operator()(std::int64_t i) const { bytes[i] = 1; }
@@ -610,6 +610,43 @@ inline bool cpu_has_avx512() {
 #endif
 }
 
+// Eight lanes of a 512-bit register: what both AVX-512 walks step.
+namespace avx512_lanes {
+
+constexpr int kWidth = 8;
+
+struct Lanes {
+  __m512d t0, t1, t2;  // next border crossing per axis
+  __m512d d0, d1, d2;  // between two borders per axis
+  __m512i index;       // the current voxel
+  __m512i s0, s1, s2;  // index offset of a step per axis
+};
+
+// One step of the lanes in `active`: x if t0 < t1 and t0 < t2, else y if t1 < t2, else z.
+KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void advance(Lanes& g, __mmask8 active) {
+  const __mmask8 lt01 = _mm512_cmp_pd_mask(g.t0, g.t1, _CMP_LT_OQ);
+  const __mmask8 lt02 = _mm512_cmp_pd_mask(g.t0, g.t2, _CMP_LT_OQ);
+  const __mmask8 lt12 = _mm512_cmp_pd_mask(g.t1, g.t2, _CMP_LT_OQ);
+  const auto x = static_cast<__mmask8>(lt01 & lt02 & active);
+  const auto y = static_cast<__mmask8>(~lt01 & lt12 & active);
+  const auto z = static_cast<__mmask8>(~(lt02 | lt12) & active);
+  g.t0 = _mm512_mask_add_pd(g.t0, x, g.t0, g.d0);
+  g.t1 = _mm512_mask_add_pd(g.t1, y, g.t1, g.d1);
+  g.t2 = _mm512_mask_add_pd(g.t2, z, g.t2, g.d2);
+  const __m512i stride = _mm512_mask_blend_epi64(x, _mm512_mask_blend_epi64(y, g.s2, g.s1), g.s0);
+  g.index = _mm512_mask_add_epi64(g.index, active, g.index, stride);
+}
+
+// The lanes' current voxels: one store of the eight indices, then scalar marks.
+template <class Marks>
+KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void mark(const Lanes& g, Marks marks) {
+  alignas(64) std::int64_t index[8];
+  _mm512_store_si512(index, g.index);
+  for (int l = 0; l < 8; ++l) marks(index[l]);
+}
+
+}  // namespace avx512_lanes
+
 // Two groups of eight lanes over a ray stream, for bit marks: a lane ends by a countdown with no
 // end test at all (a ray with a clear end stands on its end voxel after exactly steps_to_end
 // steps; any other ray takes its unchecked_steps in the lane and the rest on the scalar walk) and
@@ -619,7 +656,8 @@ inline bool cpu_has_avx512() {
 // rays step in lockstep, marked the same words at once and took 1.2 times as long with bits.
 namespace avx512_stream {
 
-constexpr int kWidth = 8;
+using avx512_lanes::kWidth;
+using avx512_lanes::mark;
 
 /// The steps a ray takes in a lane: all of them, onto its end voxel, for a clear end; else its
 /// unchecked steps (0: the scalar walk takes the whole ray).
@@ -687,12 +725,8 @@ inline LinearRay parked_ray(std::int64_t voxel) {
 }
 inline constexpr std::int64_t kParkedSteps = -1;  // counts down, never reaches 0
 
-struct Group {
-  __m512d t0, t1, t2;  // next border crossing per axis
-  __m512d d0, d1, d2;  // between two borders per axis
-  __m512i index;       // bit of the current voxel
-  __m512i s0, s1, s2;  // bit offset of a step per axis
-  __m512i count;       // lane steps left
+struct Group : avx512_lanes::Lanes {
+  __m512i count;  // lane steps left
 };
 
 KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE Group empty_group() {
@@ -732,29 +766,12 @@ KNNOCC_TARGET_AVX512 inline LaneState get(const Group& g, int l) {
 }
 
 KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void advance(Group& g) {
-  const __mmask8 lt01 = _mm512_cmp_pd_mask(g.t0, g.t1, _CMP_LT_OQ);
-  const __mmask8 lt02 = _mm512_cmp_pd_mask(g.t0, g.t2, _CMP_LT_OQ);
-  const __mmask8 lt12 = _mm512_cmp_pd_mask(g.t1, g.t2, _CMP_LT_OQ);
-  const auto x = static_cast<__mmask8>(lt01 & lt02);
-  const auto y = static_cast<__mmask8>(~lt01 & lt12);
-  const auto z = static_cast<__mmask8>(~(lt02 | lt12));
-  g.t0 = _mm512_mask_add_pd(g.t0, x, g.t0, g.d0);
-  g.t1 = _mm512_mask_add_pd(g.t1, y, g.t1, g.d1);
-  g.t2 = _mm512_mask_add_pd(g.t2, z, g.t2, g.d2);
-  const __m512i stride = _mm512_mask_blend_epi64(x, _mm512_mask_blend_epi64(y, g.s2, g.s1), g.s0);
-  g.index = _mm512_add_epi64(g.index, stride);
+  avx512_lanes::advance(g, 0xff);
   g.count = _mm512_sub_epi64(g.count, _mm512_set1_epi64(1));
 }
 
 KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE unsigned counted_out(const Group& g) {
   return _mm512_cmpeq_epi64_mask(g.count, _mm512_setzero_si512());
-}
-
-template <class Marks>
-KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void mark(const Group& g, Marks marks) {
-  alignas(64) std::int64_t index[8];
-  _mm512_store_si512(index, g.index);
-  for (int l = 0; l < 8; ++l) marks(index[l]);
 }
 
 // Lane l of the two groups (g0 holds lanes 0 .. kWidth - 1).
@@ -837,14 +854,10 @@ KNNOCC_TARGET_AVX512 std::size_t walk(Next& next, Marks marks) {
 // Sixteen rays at a time over a RayBlock, for byte marks (see the top of ray_lanes.hpp).
 namespace avx512_bundles {
 
-constexpr int kWidth = 8;
-
-struct Group {
-  __m512d t0, t1, t2;  // next border crossing per axis
-  __m512d d0, d1, d2;  // between two borders per axis
-  __m512i index;       // the current voxel
-  __m512i s0, s1, s2;  // index offset of a step per axis
-};
+using avx512_lanes::advance;
+using avx512_lanes::kWidth;
+using avx512_lanes::mark;
+using Group = avx512_lanes::Lanes;
 
 // Rays i .. i + 7 of the block, on their start voxels.
 KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE Group load(const RayBlock& b, std::size_t i) {
@@ -860,28 +873,6 @@ KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE Group load(const RayBlock& b, std::siz
   g.s1 = _mm512_load_si512(b.stride[1] + i);
   g.s2 = _mm512_load_si512(b.stride[2] + i);
   return g;
-}
-
-// One step of the lanes in `active`: x if t0 < t1 and t0 < t2, else y if t1 < t2, else z.
-KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void advance(Group& g, __mmask8 active) {
-  const __mmask8 lt01 = _mm512_cmp_pd_mask(g.t0, g.t1, _CMP_LT_OQ);
-  const __mmask8 lt02 = _mm512_cmp_pd_mask(g.t0, g.t2, _CMP_LT_OQ);
-  const __mmask8 lt12 = _mm512_cmp_pd_mask(g.t1, g.t2, _CMP_LT_OQ);
-  const auto x = static_cast<__mmask8>(lt01 & lt02 & active);
-  const auto y = static_cast<__mmask8>(~lt01 & lt12 & active);
-  const auto z = static_cast<__mmask8>(~(lt02 | lt12) & active);
-  g.t0 = _mm512_mask_add_pd(g.t0, x, g.t0, g.d0);
-  g.t1 = _mm512_mask_add_pd(g.t1, y, g.t1, g.d1);
-  g.t2 = _mm512_mask_add_pd(g.t2, z, g.t2, g.d2);
-  const __m512i stride = _mm512_mask_blend_epi64(x, _mm512_mask_blend_epi64(y, g.s2, g.s1), g.s0);
-  g.index = _mm512_mask_add_epi64(g.index, active, g.index, stride);
-}
-
-template <class Marks>
-KNNOCC_TARGET_AVX512 KNNOCC_ALWAYS_INLINE void mark(const Group& g, Marks marks) {
-  alignas(64) std::int64_t index[8];
-  _mm512_store_si512(index, g.index);
-  for (int l = 0; l < 8; ++l) marks(index[l]);
 }
 
 // `steps` steps of every lane of both groups, with no test. Not inlined: on its own the loop keeps

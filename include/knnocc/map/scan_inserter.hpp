@@ -17,9 +17,10 @@
 //   1. collect: per point the max-range rule, the ray's end point and the hit key; the key box of
 //      the scan. Threads take equal shares of the points (when the point container has random
 //      access).
-//   2. walk: every ray marks its voxels in a per-scan scratch: a dense bit per voxel of the box
-//      (detail/scan_bitmap.hpp) walked eight or four rays at a time (AVX-512 or AVX2,
-//      detail/ray_lanes.hpp) when the box is small enough, else a hashed mask per touched brick.
+//   2. walk: every ray marks its voxels in a per-scan scratch: a dense bit (or, for free voxels
+//      of small boxes on AVX-512 CPUs, byte) per voxel of the box (detail/scan_bitmap.hpp),
+//      walked sixteen or four rays at a time (AVX-512 or AVX2, detail/ray_lanes.hpp) when the box
+//      is small enough, else a hashed mask per touched brick.
 //      Each thread takes chunks of rays into its own scratch; free and occupied are unions, so
 //      the result does not depend on which thread walked which ray.
 //      Large scans whose dense box is known in advance run 1 and 2 a chunk of points at a time
@@ -93,8 +94,9 @@ struct ScanStats {
   /// not rated) whose dense box fits goes that many points at a time, which bounds the per-point
   /// buffers; the map gets the same updates either way.
   std::size_t chunks = 0;
-  /// The walk marked free voxels in a byte per voxel rather than a bit (a scan whose dense box
-  /// has at most 4 M voxels and whose rays take at least 4 M steps; faster, the same map).
+  /// The walk marked free voxels in a byte per voxel rather than a bit (on AVX-512 CPUs, a scan
+  /// whose dense box has at most 4 M voxels and whose rays take at least 4 M steps; faster, the
+  /// same map).
   bool byte_marks = false;
 };
 
@@ -830,10 +832,7 @@ class ScanInserter {
     auto next = [&]() -> const detail::LinearRay* {
       if (taken == block.size) {
         while (pos == stop)  // an empty range just asks for the next one
-          if (!more(pos, stop)) {
-            pos = stop;  // asked again once the lanes are done: still no rays
-            return nullptr;
-          }
+          if (!more(pos, stop)) return nullptr;
         detail::setup_ray_block(map_->grid(), fan, pos,
                                 std::min(kBlock, static_cast<std::size_t>(stop - pos)), block);
         pos += block.size;

@@ -48,8 +48,7 @@ class ScanBitmap {
       // is mostly crossed by its rays, so large bitmaps take huge pages (kHugeBitmap).
       bits_.reset();
       std::size_t bytes = words * sizeof(std::uint64_t);
-      if (KNNOCC_HUGE_PAGES && !bytes_ && bytes >= kHugeBitmap && bytes < kHugePage)
-        bytes = kHugePage;
+      if (KNNOCC_HUGE_PAGES && bytes >= kHugeBitmap && bytes < kHugePage) bytes = kHugePage;
       bits_ = Bits(static_cast<std::uint64_t*>(big_alloc_zeroed(bytes)), BigFree{bytes});
       capacity_ = bits_ ? bytes / sizeof(std::uint64_t) : 0;
       if (!bits_) out_of_memory();

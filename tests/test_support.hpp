@@ -6,6 +6,7 @@
 #include <doctest/doctest.h>
 
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -18,6 +19,15 @@
 #include <knnocc/io/xyz.hpp>
 
 namespace knnocc::test {
+
+/// Marks the running test case as skipped for ctest (SKIP_REGULAR_EXPRESSION in
+/// tests/CMakeLists.txt) and says why; the caller returns right after. A test that cannot run
+/// (missing data, missing liboctomap, a CPU without the instructions it tests) reports SKIPPED,
+/// never PASSED.
+inline void skip(const std::string& why) {
+  std::printf("KNNOCC_SKIPPED: %s\n", why.c_str());
+  std::fflush(stdout);
+}
 
 /// ../shared/data beside the project root, or "" when the folder is absent.
 inline std::string data_dir() {

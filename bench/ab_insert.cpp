@@ -18,9 +18,14 @@
 
 #include "bench_common.hpp"
 
+#include <knnocc/insertion/scan_inserter.hpp>
 #include <knnocc/io/xyz.hpp>
-#include <knnocc/map/scan_inserter.hpp>
+// The earlier revision's inserter, wherever that revision kept it.
+#if __has_include(<knnocc_old/insertion/scan_inserter.hpp>)
+#include <knnocc_old/insertion/scan_inserter.hpp>
+#else
 #include <knnocc_old/map/scan_inserter.hpp>
+#endif
 
 namespace {
 

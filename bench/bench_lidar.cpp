@@ -21,7 +21,7 @@
 
 #include "bench_common.hpp"
 
-#include <knnocc/map/scan_inserter.hpp>
+#include <knnocc/insertion/scan_inserter.hpp>
 #include <knnocc/version.hpp>
 
 #if KNNOCC_HAVE_OCTOMAP

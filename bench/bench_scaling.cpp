@@ -16,8 +16,8 @@
 
 #include "bench_common.hpp"
 
+#include <knnocc/insertion/scan_inserter.hpp>
 #include <knnocc/io/xyz.hpp>
-#include <knnocc/map/scan_inserter.hpp>
 #include <knnocc/version.hpp>
 
 #if KNNOCC_HAVE_OCTOMAP

@@ -24,8 +24,8 @@
 
 #include "bench_common.hpp"
 
-#include <knnocc/detail/ray_lanes.hpp>
-#include <knnocc/detail/scan_bitmap.hpp>
+#include <knnocc/insertion/detail/scan_bitmap.hpp>
+#include <knnocc/raycast/detail/fan_walk.hpp>
 
 namespace {
 
@@ -103,21 +103,21 @@ void walks(double length, int n_rays, bool camera) {
         0.5 * length, length, rays.size(), double(size[0]) * size[1] * size[2] / 8e6);
   const detail::BitMarks bits{bitmap.words()};
   const detail::ByteMarks bytes{bytemap.bytes()};
+  using detail::WalkPath;
   for (int variant = 0; variant < 7; ++variant) {
     const bool byte_marks = variant >= 3;
     const int walk = byte_marks ? variant - 3 : variant;  // 0 scalar, 1 AVX2, 2 AVX-512, 3 bundles
+    static const WalkPath paths[] = {WalkPath::scalar, WalkPath::avx2_lanes,
+                                     WalkPath::avx512_stream, WalkPath::avx512_bundles};
     static const char* const names[] = {"scalar", "AVX2, 4 lanes", "AVX-512, 2x8 lanes",
                                         "AVX-512 bundles"};
+    const WalkPath path = paths[walk];
     char name[64];
     std::snprintf(name, sizeof name, "%s, %s", names[walk], byte_marks ? "bytes" : "bits");
-#if KNNOCC_AVX2_LANES
-    if ((walk == 1 && !detail::cpu_has_avx2()) || (walk >= 2 && !detail::cpu_has_avx512())) {
-      std::printf("  %-28s not supported by this CPU\n", name);
+    if (!detail::walk_path_available(path)) {
+      std::printf("  %-28s not available on this CPU\n", name);
       continue;
     }
-#else
-    if (walk > 0) continue;
-#endif
     double best = 1e30;
     std::size_t visits = 0;
     for (int rep = 0; rep < 5; ++rep) {
@@ -126,21 +126,13 @@ void walks(double length, int n_rays, bool camera) {
         return i == linear.size() ? nullptr : &linear[i++];
       };
       const double t0 = bench::now();
-      if (walk == 0)
-        visits = byte_marks ? detail::walk_linear_rays_scalar(next, bytes)
-                            : detail::walk_linear_rays_scalar(next, bits);
-#if KNNOCC_AVX2_LANES
-      if (walk == 1)
-        visits = byte_marks ? detail::walk_linear_rays_avx2(next, bytes)
-                            : detail::walk_linear_rays_avx2(next, bits);
-      if (walk == 2)
-        visits = byte_marks ? detail::avx512_stream::walk(next, bytes)
-                            : detail::avx512_stream::walk(next, bits);
-      if (walk == 3) {
+      if (path == WalkPath::avx512_bundles) {
         visits = 0;
-        for (const auto& b : blocks) visits += detail::avx512_bundles::walk_block(*b, bytes);
+        for (const auto& b : blocks) visits += detail::walk_ray_block(path, *b, bytes);
+      } else {
+        visits = byte_marks ? detail::walk_linear_rays(path, next, bytes)
+                            : detail::walk_linear_rays(path, next, bits);
       }
-#endif
       best = std::min(best, bench::now() - t0);
     }
     std::printf("  %-28s %.3f ns per voxel visited (%.1f visits per ray, best of 5)\n", name,

@@ -10,8 +10,8 @@
 #include <random>
 #include <vector>
 
-#include <knnocc/detail/huge_pages.hpp>
-#include <knnocc/map/scan_inserter.hpp>
+#include <knnocc/core/detail/huge_pages.hpp>
+#include <knnocc/insertion/scan_inserter.hpp>
 
 #include "test_support.hpp"
 

@@ -10,9 +10,9 @@
 #include <set>
 #include <vector>
 
-#include <knnocc/detail/point_bounds.hpp>
-#include <knnocc/detail/point_keys.hpp>
-#include <knnocc/map/scan_inserter.hpp>
+#include <knnocc/insertion/detail/point_bounds.hpp>
+#include <knnocc/insertion/detail/point_keys.hpp>
+#include <knnocc/insertion/scan_inserter.hpp>
 
 #include "test_support.hpp"
 

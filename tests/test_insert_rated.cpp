@@ -9,7 +9,7 @@
 #include <set>
 #include <vector>
 
-#include <knnocc/map/scan_inserter.hpp>
+#include <knnocc/insertion/scan_inserter.hpp>
 #include <knnocc/raycast/dda.hpp>
 
 #include "test_support.hpp"

@@ -13,9 +13,9 @@
 #include <tuple>
 #include <vector>
 
-#include <knnocc/detail/ray_lanes.hpp>
+#include <knnocc/insertion/scan_inserter.hpp>
 #include <knnocc/io/xyz.hpp>
-#include <knnocc/map/scan_inserter.hpp>
+#include <knnocc/raycast/detail/fan_walk.hpp>
 
 #include "test_support.hpp"
 
@@ -225,94 +225,77 @@ TEST_CASE("insert_threads.lanes_walk_the_scalar_voxels") {
         for (const OcKey& k : keys[i])
           knnocc::detail::set_bit(expected.data(), box.index(k[0], k[1], k[2]));
       }
-      // Every walk this CPU can run, with bit marks and with byte marks: 0 scalar, 1 the
-      // dispatched stream walk, 2 the AVX2 lanes, 3 the AVX-512 stream lanes, 4 the dispatched
-      // block walk (AVX-512 bundles with bytes), 5 the AVX-512 bundles.
+      // Every walk path this CPU runs, over the chunk as a ray stream and as blocks, with bit marks
+      // and with byte marks (on the bundles path a stream goes on the AVX-512 stream lanes).
       knnocc::detail::ScanBitmap bytemap;
       bytemap.reshape(base, size, true);
       const auto block = std::make_unique<knnocc::detail::RayBlock>();
-      for (int variant = 0; variant < 6; ++variant)
-        for (const bool byte_marks : {false, true}) {
-          std::vector<std::uint64_t> bits(words, 0);
-          const knnocc::detail::BitMarks bit_marks{bits.data()};
-          const knnocc::detail::ByteMarks byte_marks_to{bytemap.bytes()};
-          std::size_t next = 0;
-          auto source = [&]() -> const knnocc::detail::LinearRay* {
-            return next == linear.size() ? nullptr : &linear[next++];
-          };
-          // walk(marks): the variant's walk of every ray of the chunk.
-          auto walk = [&](auto marks) -> std::size_t {
-            if (variant == 0) return knnocc::detail::walk_linear_rays_scalar(source, marks);
-            if (variant == 1) return knnocc::detail::walk_linear_rays(source, marks);
-            if (variant == 4 || variant == 5) {  // blocks of at most RayBlock::kRays rays
-              std::size_t visits = 0;
+      using knnocc::detail::WalkPath;
+      for (const WalkPath path : {WalkPath::scalar, WalkPath::avx2_lanes, WalkPath::avx512_stream,
+                                  WalkPath::avx512_bundles})
+        for (const bool as_blocks : {false, true})
+          for (const bool byte_marks : {false, true}) {
+            if (!knnocc::detail::walk_path_available(path)) continue;
+            std::vector<std::uint64_t> bits(words, 0);
+            const knnocc::detail::BitMarks bit_marks{bits.data()};
+            const knnocc::detail::ByteMarks byte_marks_to{bytemap.bytes()};
+            std::size_t next = 0;
+            auto source = [&]() -> const knnocc::detail::LinearRay* {
+              return next == linear.size() ? nullptr : &linear[next++];
+            };
+            // walk(marks): every ray of the chunk on the path.
+            auto walk = [&](auto marks) -> std::size_t {
+              if (!as_blocks) return knnocc::detail::walk_linear_rays(path, source, marks);
+              std::size_t visits = 0;  // blocks of at most RayBlock::kRays rays
               for (std::size_t b = 0; b < linear.size(); b += knnocc::detail::RayBlock::kRays) {
                 const std::size_t n = std::min(knnocc::detail::RayBlock::kRays, linear.size() - b);
                 for (std::size_t i = 0; i < n; ++i) block->set(i, linear[b + i]);
                 block->close(n);
-#if KNNOCC_AVX2_LANES
-                if (variant == 5)
-                  visits += knnocc::detail::avx512_bundles::walk_block(*block, marks);
-                else
-#endif
-                  visits += knnocc::detail::walk_ray_block(*block, marks);
+                visits += knnocc::detail::walk_ray_block(path, *block, marks);
               }
               return visits;
+            };
+            if (linear.empty()) continue;
+            std::size_t visits = 0;
+            if (byte_marks) {
+              visits = walk(byte_marks_to);
+              // The byte map read back as bits, and zero again, through take_brick_row.
+              std::vector<knnocc::VoxelMask> masks(static_cast<std::size_t>(bytemap.bricks(0)));
+              for (std::int64_t bz = 0; bz < bytemap.bricks(2); ++bz)
+                for (std::int64_t by = 0; by < bytemap.bricks(1); ++by) {
+                  for (auto& m : masks) m.clear();
+                  bytemap.take_brick_row(by, bz, masks.data());
+                  for (std::int64_t bx = 0; bx < bytemap.bricks(0); ++bx)
+                    for (int v = 0; v < knnocc::kBrickVoxels; ++v)
+                      if (masks[static_cast<std::size_t>(bx)].test(v))
+                        knnocc::detail::set_bit(bits.data(),
+                                                bytemap.index(base[0] + bx * 8 + (v & 7),
+                                                              base[1] + by * 8 + ((v >> 3) & 7),
+                                                              base[2] + bz * 8 + (v >> 6)));
+                }
+              bytemap.mark_clean();
+            } else {
+              visits = walk(bit_marks);
             }
-#if KNNOCC_AVX2_LANES
-            if (variant == 2) return knnocc::detail::walk_linear_rays_avx2(source, marks);
-            return knnocc::detail::avx512_stream::walk(source, marks);
-#else
-            return 0;
-#endif
-          };
-#if KNNOCC_AVX2_LANES
-          if ((variant == 2 && !knnocc::detail::cpu_has_avx2()) ||
-              ((variant == 3 || variant == 5) && !knnocc::detail::cpu_has_avx512()))
-            continue;
-#else
-          if (variant == 2 || variant == 3 || variant == 5) continue;
-#endif
-          if (linear.empty()) continue;
-          std::size_t visits = 0;
-          if (byte_marks) {
-            visits = walk(byte_marks_to);
-            // The byte map read back as bits, and zero again, through take_brick_row.
-            std::vector<knnocc::VoxelMask> masks(static_cast<std::size_t>(bytemap.bricks(0)));
-            for (std::int64_t bz = 0; bz < bytemap.bricks(2); ++bz)
-              for (std::int64_t by = 0; by < bytemap.bricks(1); ++by) {
-                for (auto& m : masks) m.clear();
-                bytemap.take_brick_row(by, bz, masks.data());
-                for (std::int64_t bx = 0; bx < bytemap.bricks(0); ++bx)
-                  for (int v = 0; v < knnocc::kBrickVoxels; ++v)
-                    if (masks[static_cast<std::size_t>(bx)].test(v))
-                      knnocc::detail::set_bit(bits.data(),
-                                              bytemap.index(base[0] + bx * 8 + (v & 7),
-                                                            base[1] + by * 8 + ((v >> 3) & 7),
-                                                            base[2] + bz * 8 + (v >> 6)));
-              }
-            bytemap.mark_clean();
-          } else {
-            visits = walk(bit_marks);
+            CAPTURE(static_cast<int>(path));
+            CAPTURE(as_blocks);
+            CAPTURE(byte_marks);
+            CHECK(visits == expected_visits);
+            CHECK(bits == expected);
           }
-          CAPTURE(variant);
-          CAPTURE(byte_marks);
-          CHECK(visits == expected_visits);
-          CHECK(bits == expected);
-        }
       walked += expected_visits;
     }
     MESSAGE(walked << " voxels walked at resolution " << res << ", " << clear
                    << " rays with a clear end");
     CHECK(clear > 1000);  // both kinds of lanes walk
   }
-#if KNNOCC_AVX2_LANES
-  const auto tested = [](bool has) {
-    return std::string(has ? "tested" : "not supported by this CPU");
+  const auto tested = [](knnocc::detail::WalkPath path) {
+    return std::string(knnocc::detail::walk_path_available(path) ? "tested"
+                                                                 : "not available on this CPU");
   };
-  MESSAGE("AVX2 lane walk: " << tested(knnocc::detail::cpu_has_avx2()) << "; AVX-512 lane walk: "
-                             << tested(knnocc::detail::cpu_has_avx512()));
-#endif
+  MESSAGE("AVX2 lane walk: " << tested(knnocc::detail::WalkPath::avx2_lanes)
+                             << "; AVX-512 lane walks: "
+                             << tested(knnocc::detail::WalkPath::avx512_stream));
 }
 
 TEST_CASE("insert_threads.simd_ray_setup_matches_setup_walk") {
@@ -393,27 +376,6 @@ TEST_CASE("insert_threads.simd_ray_setup_matches_setup_walk") {
   CHECK(keys.size() == 1);  // the origin voxel; the next step lands on the end voxel
 }
 
-namespace {
-
-// walk_ray's cursor that keeps the bit index and counts the visits, storing nothing.
-struct StepCounter {
-  std::int64_t index;
-  const std::int64_t* stride;
-  std::int64_t end_index;
-  std::size_t visits = 0;
-  template <int Axis>
-  void step() {
-    index += stride[Axis];
-  }
-  bool at_end() const { return index == end_index; }
-  bool visit() {
-    ++visits;
-    return true;
-  }
-};
-
-}  // namespace
-
 TEST_CASE("insert_threads.clear_end_points_end_on_their_voxel") {
   // end_point_clear() lets the lane walks end a ray by its step count, with no end test at all.
   // Its claim, checked on the one-ray walk: a flagged ray ends on its end voxel after exactly
@@ -450,10 +412,11 @@ TEST_CASE("insert_threads.clear_end_points_end_on_their_voxel") {
       const knnocc::detail::RayFan fan(grid, o, okey, lo, stride);
       knnocc::detail::LinearRay r;
       knnocc::detail::setup_linear_ray(grid, fan, {e, {ke[0], ke[1], ke[2]}}, r);
-      StepCounter walk{r.index, r.stride, r.end_index};
-      knnocc::walk_ray(r.state, walk);
-      const bool on_end = walk.index == r.end_index &&
-                          walk.visits + 1 == static_cast<std::size_t>(r.state.steps_to_end);
+      knnocc::IndexPosition at{r.index, r.stride, r.end_index};
+      std::size_t visits = 0;
+      knnocc::walk_ray(r.state, at, [&](const knnocc::IndexPosition&) { return ++visits, true; });
+      const bool on_end =
+          at.index == r.end_index && visits + 1 == static_cast<std::size_t>(r.state.steps_to_end);
       ++rays;
       flagged += r.clear_end;
       other_end += !on_end;

@@ -6,7 +6,7 @@
 #include <set>
 #include <vector>
 
-#include <knnocc/detail/huge_pages.hpp>
+#include <knnocc/core/detail/huge_pages.hpp>
 #include <knnocc/map/occupancy_map.hpp>
 #include <knnocc/map/value_pool.hpp>
 

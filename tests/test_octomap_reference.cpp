@@ -9,7 +9,7 @@
 
 #include <knnocc/io/sequence.hpp>
 #include <knnocc/io/xyz.hpp>
-#include <knnocc/map/scan_inserter.hpp>
+#include <knnocc/insertion/scan_inserter.hpp>
 #include <knnocc/raycast/cast_ray.hpp>
 
 #include "test_support.hpp"

@@ -15,7 +15,7 @@
 
 #include <knnocc/io/octomap_tree.hpp>
 #include <knnocc/io/xyz.hpp>
-#include <knnocc/map/scan_inserter.hpp>
+#include <knnocc/insertion/scan_inserter.hpp>
 
 #include "test_support.hpp"
 

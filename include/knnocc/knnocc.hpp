@@ -14,7 +14,7 @@
 
 #include "map/brick.hpp"
 #include "map/occupancy_map.hpp"
-#include "map/scan_inserter.hpp"
+#include "insertion/scan_inserter.hpp"
 
 #include "raycast/cast_ray.hpp"
 #include "raycast/dda.hpp"

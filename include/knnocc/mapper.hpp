@@ -1,24 +1,31 @@
 #pragma once
 // Mapper: one keyframe at a time into an occupancy map (paper Alg. 3, with Alg. 2 before it when
-// the sensor model needs the map point cloud). The parts are template parameters:
+// the sensor model needs the map point cloud). Its parts are policies, each a concept documented
+// where it is declared and checked with a static_assert that names what is missing:
 //
-//   Model    the inverse sensor model: OctoMapModel (eq 4) or KnnModel (eq 13-15)
-//   Key      the map's key type (OcKey: OctoMap's 16-bit keys; WideKey for larger areas)
-//   Tracker  s_p and the normal distribution of the map point cloud (KnnTracker), kept only when
-//            Model::uses_map_cloud
-//   Caster   the ray caster that applies a scan to the map (ScanInserter: exact DDA, occupied
-//            wins, one update per voxel per scan)
+//   Model       the inverse sensor model (sensor/sensor_model.hpp): OctoMapModel (eq 4, fixed
+//               hit and miss log-odds) or KnnModel (eq 13-15, every endpoint rated by its k-NN
+//               statistics)
+//   Key         the map's key type (OcKey: OctoMap's 16-bit keys; WideKey for larger areas)
+//   Tracker     the map point cloud's k-NN statistics (knn/tracker_concept.hpp), kept only for a
+//               rated model; by default the model's tracker_type (KnnTracker for KnnModel)
+//   Integrator  applies one scan's updates to the map (insertion/scan_integrator.hpp):
+//               ScanInserter (exact DDA, occupied wins, one update per voxel per scan)
 //
-// so Mapper<OctoMapModel> and Mapper<KnnModel> differ in one type and take the same keyframes.
+// so Mapper<OctoMapModel> and Mapper<KnnModel> differ in one type and take the same keyframes. The
+// model, the tracker and the map may be passed constructed (e.g. KnnTracker<PaperAnnulus> with its
+// own dr and s_max, or a map read from a file to continue it); examples/custom_policies.cpp
+// writes its own sensor model and tracker.
 //
 // One keyframe (insert_keyframe): its points in the world frame, the sensor position, and the
 // map-point ids of the points when the source has them (ORB-SLAM map points). The map point cloud
 // is the union of the keyframes' points (KeyframeUnion: an id joins once, at its first position;
 // without ids every point of every keyframe is a new map point), or the caller gives its change
 // explicitly (e.g. after bundle adjustment or map-point culling).
-//   OctoMapModel: OctoMap's insertPointCloud(points, origin, max_range, discretize).
-//   KnnModel:     the change goes through the tracker (Alg. 2), every endpoint is rated with its
-//                 s_{p,t} (eq 13, 14) and the scan applied with per-voxel sums (eq 15, Alg. 3).
+//   fixed model (OctoMapModel): OctoMap's insertPointCloud(points, origin, max_range, discretize).
+//   rated model (KnnModel):     the change goes through the tracker (Alg. 2), every endpoint is
+//                               rated with its s_{p,t} (eq 13, 14) and the scan applied with
+//                               per-voxel sums (eq 15, Alg. 3).
 // max_range keeps OctoMap's meaning for both models: a point farther than max_range from the
 // sensor marks nothing occupied, casts its ray truncated at max_range, and (k-NN model) stays out
 // of the map point cloud. Points with a NaN/Inf coordinate or outside the key range are skipped
@@ -39,13 +46,16 @@
 #include "core/key.hpp"
 #include "core/point3.hpp"
 #include "core/point_traits.hpp"
+#include "insertion/scan_inserter.hpp"
+#include "insertion/scan_integrator.hpp"
 #include "knn/change_set.hpp"
-#include "knn/tracker.hpp"
+#include "knn/tracker_concept.hpp"
+#include "knn/tracker_types.hpp"
 #include "map/occupancy_map.hpp"
-#include "map/scan_inserter.hpp"
 #include "raycast/dda.hpp"
 #include "sensor/endpoint_rating.hpp"
 #include "sensor/octomap_model.hpp"
+#include "sensor/sensor_model.hpp"
 
 namespace knnocc {
 
@@ -67,32 +77,76 @@ struct KeyframeStats {
 };
 
 namespace detail {
-template <class M, class = void>
-struct uses_map_cloud : std::false_type {};
-template <class M>
-struct uses_map_cloud<M, std::void_t<decltype(M::uses_map_cloud)>>
-    : std::bool_constant<M::uses_map_cloud> {};
 struct NoTracker {};
+// The tracker a model names (Model::tracker_type), else none.
+template <class M, class = void>
+struct default_tracker {
+  using type = NoTracker;
+};
+template <class M>
+struct default_tracker<M, std::void_t<typename M::tracker_type>> {
+  using type = typename M::tracker_type;
+};
+template <class M>
+using default_tracker_t = typename default_tracker<M>::type;
+
+template <class M, class = void>
+struct has_tracker_params : std::false_type {};
+template <class M>
+struct has_tracker_params<M, std::void_t<decltype(std::declval<const M&>().tracker_params())>>
+    : std::true_type {};
 }  // namespace detail
 
-template <class Model = OctoMapModel, class Key = OcKey, class Tracker = KnnTracker<>,
-          class Caster = ScanInserter<Key, Model>>
+template <class Model = OctoMapModel, class Key = OcKey,
+          class Tracker = detail::default_tracker_t<Model>,
+          class Integrator = ScanInserter<Key, Model>>
 class Mapper {
  public:
   using model_type = Model;
   using key_type = Key;
   using map_type = OccupancyMap<Key>;
   using tracker_type = Tracker;
+  using integrator_type = Integrator;
   static constexpr bool uses_map_cloud = detail::uses_map_cloud<Model>::value;
 
-  /// Rejects resolution <= 0 and bad options (std::invalid_argument; abort without exceptions).
+ private:
+  // The concepts of the parts, each failing with a message that names what is missing.
+  static constexpr bool check_parts() {
+    detail::check_sensor_model<Model>();
+    if constexpr (uses_map_cloud) {
+      static_assert(!std::is_same_v<Tracker, detail::NoTracker>,
+                    "a sensor model with uses_map_cloud = true needs a tracker: declare `using "
+                    "tracker_type = ...` in the model or name Mapper's Tracker parameter");
+      if constexpr (!std::is_same_v<Tracker, detail::NoTracker>) detail::check_tracker<Tracker>();
+    }
+    detail::check_scan_integrator<Integrator, Key, Model, uses_map_cloud>();
+    return true;
+  }
+  static_assert(check_parts());
+
+ public:
+  /// A new map of `resolution` (with options.occupancy's clamping) and, for a rated model, a new
+  /// tracker: Tracker(model.tracker_params()) when the model has them, else Tracker(). Rejects
+  /// resolution <= 0 and bad options (std::invalid_argument; abort without exceptions).
   explicit Mapper(double resolution, Model model = Model(), MapperOptions options = {})
+      : Mapper(map_type(resolution, options.occupancy), model, make_tracker(model), options) {}
+  /// The same with the caller's tracker (e.g. KnnTracker<PaperAnnulus>(params, {dr, s_max})).
+  Mapper(double resolution, Model model, Tracker tracker, MapperOptions options = {})
+      : Mapper(map_type(resolution, options.occupancy), std::move(model), std::move(tracker),
+               options) {}
+  /// Continues `map` (e.g. read from an OctoMap .ot file; its own clamping applies and
+  /// options.occupancy is not used). A rated model's tracker starts empty: the keyframes that made
+  /// the map are not in its map point cloud.
+  Mapper(map_type map, Model model, MapperOptions options = {})
+      : Mapper(std::move(map), model, make_tracker(model), options) {}
+  /// The same with the caller's tracker.
+  Mapper(map_type map, Model model, Tracker tracker, MapperOptions options = {})
       : options_(checked(options)),
-        map_(resolution, options.occupancy),
-        model_(model),
-        tracker_(make_tracker(model)),
-        caster_(map_, model, options.threads) {}
-  Mapper(Mapper&&) = delete;  // the caster points at the map
+        map_(std::move(map)),
+        model_(std::move(model)),
+        tracker_(std::move(tracker)),
+        integrator_(map_, model_, options.threads) {}
+  Mapper(Mapper&&) = delete;  // the integrator points at the map
 
   const map_type& map() const { return map_; }
   map_type& map() { return map_; }
@@ -116,7 +170,8 @@ class Mapper {
     KeyframeStats ks;
     if constexpr (!uses_map_cloud) {
       (void)ids;
-      ks.scan = caster_.insert_point_cloud(origin, points, options_.max_range, options_.discretize);
+      ks.scan =
+          integrator_.insert_point_cloud(origin, points, options_.max_range, options_.discretize);
     } else {
       use_mode(Mode::keyframe_union);
       if (!load(origin, points, ids, ks)) return ks;
@@ -158,8 +213,6 @@ class Mapper {
   }
 
  private:
-  using TrackerMember = std::conditional_t<uses_map_cloud, Tracker, detail::NoTracker>;
-
   static const MapperOptions& checked(const MapperOptions& o) {
     if (o.max_range == 0.0 || std::isnan(o.max_range))
       detail::invalid_argument("max_range must be > 0, or < 0 for no limit");
@@ -169,11 +222,16 @@ class Mapper {
     return o;
   }
 
-  static TrackerMember make_tracker(const Model& model) {
-    if constexpr (uses_map_cloud)
-      return Tracker(model.tracker_params());
-    else
-      return TrackerMember{};
+  static Tracker make_tracker(const Model& model) {
+    if constexpr (detail::has_tracker_params<Model>::value) {
+      if constexpr (std::is_constructible_v<Tracker, decltype(model.tracker_params())>)
+        return Tracker(model.tracker_params());
+      else
+        return Tracker();
+    } else {
+      (void)model;
+      return Tracker();
+    }
   }
 
   // How the map cloud's changes arrive; mixing the two would let KeyframeUnion and the tracker
@@ -206,7 +264,7 @@ class Mapper {
     return false;
   }
 
-  // The caster's tests (OctoMap's float norm against max_range, the key range), so the map
+  // The integrator's tests (OctoMap's float norm against max_range, the key range), so the map
   // cloud holds exactly the points that make an occupied update.
   bool within_range(std::size_t j) const {
     const Point3d& p = world_[j];
@@ -235,14 +293,14 @@ class Mapper {
       ks.unrated += std::isnan(s);
       ks.rays += ratings_[j].casts_ray;
     }
-    ks.scan = caster_.insert_rated(origin_, world_, ratings_, options_.max_range);
+    ks.scan = integrator_.insert_rated(origin_, world_, ratings_, options_.max_range);
   }
 
   MapperOptions options_;
   map_type map_;
   Model model_;
-  TrackerMember tracker_;
-  Caster caster_;
+  Tracker tracker_;  // detail::NoTracker for a fixed model
+  Integrator integrator_;
   // k-NN model: the keyframe being inserted (kept for their memory).
   Mode mode_ = Mode::unset;
   KeyframeUnion union_;

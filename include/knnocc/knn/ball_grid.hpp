@@ -18,8 +18,8 @@
 #include <limits>
 #include <vector>
 
+#include "../core/detail/flat_index.hpp"
 #include "../core/point3.hpp"
-#include "../detail/flat_index.hpp"
 
 namespace knnocc::detail {
 

@@ -167,6 +167,21 @@ class PointIndex {
   explicit PointIndex(std::size_t rebuild_min = 4096) : rebuild_min_(rebuild_min) { rebuild(); }
   PointIndex(const PointIndex&) = delete;
   PointIndex& operator=(const PointIndex&) = delete;
+  /// Moves the dataset and the trees (the trees' adaptors stay where they are, on the heap, and
+  /// now read the moved dataset).
+  PointIndex(PointIndex&& o) noexcept
+      : rebuild_min_(o.rebuild_min_),
+        pts_(std::move(o.pts_)),
+        ids_(std::move(o.ids_)),
+        alive_(std::move(o.alive_)),
+        live_(o.live_),
+        in_tree_(o.in_tree_),
+        views_(std::move(o.views_)),
+        base_tree_(std::move(o.base_tree_)),
+        recent_tree_(std::move(o.recent_tree_)) {
+    views_->base.pts = views_->recent.pts = &pts_;
+  }
+  PointIndex& operator=(PointIndex&&) = delete;
 
   /// Appends a point; it joins the search structure at the next flush().
   index_type append(std::uint64_t id, const Point3d& p) {
@@ -183,13 +198,13 @@ class PointIndex {
     if (in_tree_ == pts_.size()) return;
     // The static base tree searches several times faster than nanoflann's dynamic forest;
     // rebuild it once the recent points outgrow a quarter of it (amortised O(log n) per point).
-    if (pts_.size() - base_.count > std::max(rebuild_min_, base_.count / 4)) {
+    if (pts_.size() - views_->base.count > std::max(rebuild_min_, views_->base.count / 4)) {
       rebuild();
       return;
     }
-    recent_.count = pts_.size() - recent_.first;
-    recent_tree_->addPoints(static_cast<index_type>(in_tree_ - recent_.first),
-                            static_cast<index_type>(recent_.count - 1));
+    views_->recent.count = pts_.size() - views_->recent.first;
+    recent_tree_->addPoints(static_cast<index_type>(in_tree_ - views_->recent.first),
+                            static_cast<index_type>(views_->recent.count - 1));
     in_tree_ = pts_.size();
   }
   /// Marks a point dead (never reused).
@@ -198,7 +213,8 @@ class PointIndex {
     alive_[i] = 0;
     --live_;
     // The dynamic tree forgets it; the static base skips dead points when they are offered.
-    if (i >= recent_.first && i < in_tree_) recent_tree_->removePoint(i - recent_.first);
+    if (i >= views_->recent.first && i < in_tree_)
+      recent_tree_->removePoint(i - views_->recent.first);
   }
 
   std::size_t size() const { return pts_.size(); }  ///< dataset entries, dead ones included
@@ -247,7 +263,7 @@ class PointIndex {
     // dynamic forest's per-point tree number.
     return pts_.capacity() * sizeof(Point3d) + ids_.capacity() * sizeof(std::uint64_t) +
            alive_.capacity() + pts_.size() * (sizeof(index_type) + 16) +
-           recent_.count * sizeof(int);
+           views_->recent.count * sizeof(int);
   }
 
  private:
@@ -260,26 +276,26 @@ class PointIndex {
   template <class Collector>
   void search(Collector& c, const Point3d& q) const {
     const double v[3] = {q.x, q.y, q.z};
-    if (base_.count) {
+    if (views_->base.count) {
       c.offset = 0;
       base_tree_->findNeighbors(c, v, detail::NanoflannSearchParams());
     }
-    if (recent_.count) {
-      c.offset = static_cast<index_type>(recent_.first);
+    if (views_->recent.count) {
+      c.offset = static_cast<index_type>(views_->recent.first);
       recent_tree_->findNeighbors(c, v, detail::NanoflannSearchParams());
     }
   }
 
   // Everything appended so far goes into a new static base tree; the dynamic tree starts empty.
   void rebuild() {
-    base_ = {&pts_, 0, pts_.size()};
+    views_->base = {&pts_, 0, pts_.size()};
     base_tree_.reset();
-    if (base_.count)
-      base_tree_ =
-          std::make_unique<StaticTree>(3, base_, nanoflann::KDTreeSingleIndexAdaptorParams(10));
-    recent_ = {&pts_, pts_.size(), 0};
-    recent_tree_ =
-        std::make_unique<DynamicTree>(3, recent_, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+    if (views_->base.count)
+      base_tree_ = std::make_unique<StaticTree>(3, views_->base,
+                                                nanoflann::KDTreeSingleIndexAdaptorParams(10));
+    views_->recent = {&pts_, pts_.size(), 0};
+    recent_tree_ = std::make_unique<DynamicTree>(3, views_->recent,
+                                                 nanoflann::KDTreeSingleIndexAdaptorParams(10));
     in_tree_ = pts_.size();
   }
 
@@ -289,9 +305,13 @@ class PointIndex {
   std::vector<std::uint8_t> alive_;
   std::size_t live_ = 0;
   std::size_t in_tree_ = 0;  // dataset entries already searchable
-  detail::PointCloudAdaptor base_, recent_;
-  std::unique_ptr<StaticTree> base_tree_;     // entries [0, base_.count)
-  std::unique_ptr<DynamicTree> recent_tree_;  // entries [recent_.first, in_tree_), local indices
+  // The trees keep references to their adaptors: on the heap, so that a move keeps them valid.
+  struct Views {
+    detail::PointCloudAdaptor base, recent;
+  };
+  std::unique_ptr<Views> views_ = std::make_unique<Views>();
+  std::unique_ptr<StaticTree> base_tree_;     // entries [0, base.count)
+  std::unique_ptr<DynamicTree> recent_tree_;  // entries [recent.first, in_tree_), local indices
 };
 
 }  // namespace knnocc

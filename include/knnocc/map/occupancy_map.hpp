@@ -29,8 +29,8 @@
 #include "../core/grid.hpp"
 #include "../core/key.hpp"
 #include "../core/log_odds.hpp"
-#include "../detail/brick_values.hpp"
-#include "../detail/flat_index.hpp"
+#include "detail/brick_values.hpp"
+#include "../core/detail/flat_index.hpp"
 #include "brick.hpp"
 #include "value_pool.hpp"
 

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "../core/config.hpp"
-#include "../detail/huge_pages.hpp"
+#include "../core/detail/huge_pages.hpp"
 #include "brick.hpp"
 
 namespace knnocc {

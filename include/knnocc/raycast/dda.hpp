@@ -10,8 +10,9 @@
 //
 // The walk is split in two so that several walkers share OctoMap's arithmetic: setup_walk() (via
 // start_ray()) does the set-up, the one place with OctoMap's float/double rules, and walk_ray()
-// the stepping, with a cursor that decides what a voxel is (a Key here, a bit index or a brick
-// mask in ScanInserter). detail/ray_lanes.hpp holds the several-rays-at-once versions of both,
+// the stepping, from a position (per-axis keys, or an index into a dense box) with a visitor
+// that decides what entering a voxel does (a Key here, a bit or a brick mask in ScanInserter).
+// raycast/detail/ holds the several-rays-at-once versions of both,
 // which repeat these operations in the same order (the tests compare them bit for bit). Each
 // axis moves monotonically, one voxel per step, so the walk can stand on the end voxel only after
 // exactly |end - origin|_1 steps: the end test is a countdown, not a key comparison per step.
@@ -126,15 +127,46 @@ RayStart start_ray(const Grid<Key>& grid, const Point3f& origin, const Point3f& 
   return RayStart::walk;
 }
 
-/// Walks from the voxel the cursor stands on (already visited) to the end of the ray:
-///   cursor.step<axis>()  moves one voxel along axis (in the ray's direction);
-///   cursor.at_end()      is the cursor on the end voxel? (asked only when steps_to_end runs out);
-///   cursor.visit()       the walk entered a voxel; returns false to stop (e.g. key range left).
-/// The next axis is the one with the smallest t_max, the higher axis on ties (OctoMap's
-/// `(t0 < t1) ? (t0 < t2 ? 0 : 2) : (t1 < t2 ? 1 : 2)`); the walk ends on the end voxel or
-/// when every next border lies beyond the ray length.
-template <class Cursor>
-void walk_ray(const WalkState& s, Cursor& cursor) {
+/// Where a walk stands, per-axis voxel indices: for_each_ray_key() and ScanInserter's hashed
+/// scratch walk with it (a Key is built only for a visited voxel).
+struct KeyPosition {
+  std::int64_t k[3];
+  std::int64_t dir[3];  ///< -1, 0, +1
+  std::int64_t end[3];
+
+  template <int Axis>
+  void step() {
+    k[Axis] += dir[Axis];
+  }
+  bool at_end() const { return k[0] == end[0] && k[1] == end[1] && k[2] == end[2]; }
+  /// Within [0, extent) on every axis (OctoMap only asserts this; a walk that would leave the key
+  /// range ends instead).
+  bool in_range(std::int64_t extent) const { return ((k[0] | k[1] | k[2]) & ~(extent - 1)) == 0; }
+};
+
+/// Where a walk stands, one index into a dense box of voxels: a step along axis a adds stride[a]
+/// (the ray walks into ScanInserter's dense scratch with it, raycast/detail/).
+struct IndexPosition {
+  std::int64_t index;
+  const std::int64_t* stride;  ///< [3], signed by the ray's step direction
+  std::int64_t end;            ///< the end voxel's index
+
+  template <int Axis>
+  void step() {
+    index += stride[Axis];
+  }
+  bool at_end() const { return index == end; }
+};
+
+/// Walks from the voxel `at` stands on (already visited) to the end of the ray. `at` is a
+/// position (KeyPosition, IndexPosition, or any type with `step<Axis>()`, a move of one voxel along
+/// the axis in the ray's direction, and `at_end()`, asked only when steps_to_end runs out);
+/// `visit(at)` is called for every voxel the walk enters and returns false to stop (e.g. when the
+/// key range is left). The next axis is the one with the smallest t_max, the higher axis on ties
+/// (OctoMap's `(t0 < t1) ? (t0 < t2 ? 0 : 2) : (t1 < t2 ? 1 : 2)`); the walk ends on the end voxel
+/// or when every next border lies beyond the ray length.
+template <class Position, class Visit>
+void walk_ray(const WalkState& s, Position& at, Visit&& visit) {
   double t0 = s.t_max[0], t1 = s.t_max[1], t2 = s.t_max[2];
   const double d0 = s.t_delta[0], d1 = s.t_delta[1], d2 = s.t_delta[2], length = s.length;
   std::int64_t steps = s.steps_to_end;
@@ -142,50 +174,23 @@ void walk_ray(const WalkState& s, Cursor& cursor) {
     if (t0 < t1) {
       if (t0 < t2) {
         t0 += d0;
-        cursor.template step<0>();
+        at.template step<0>();
       } else {
         t2 += d2;
-        cursor.template step<2>();
+        at.template step<2>();
       }
     } else if (t1 < t2) {
       t1 += d1;
-      cursor.template step<1>();
+      at.template step<1>();
     } else {
       t2 += d2;
-      cursor.template step<2>();
+      at.template step<2>();
     }
-    if (--steps == 0 && cursor.at_end()) return;
+    if (--steps == 0 && at.at_end()) return;
     if (std::min(std::min(t0, t1), t2) > length) return;
-    if (!cursor.visit()) return;
+    if (!visit(static_cast<const Position&>(at))) return;
   }
 }
-
-namespace detail {
-
-// walk_ray's cursor for keys: per-axis int64 indices (no Key rebuilt per step until visited).
-template <class Key, class Visit>
-struct KeyCursor {
-  std::int64_t k[3];
-  std::int64_t dir[3];  // -1, 0, +1
-  std::int64_t end[3];
-  Visit& visit_fn;
-
-  template <int Axis>
-  void step() {
-    k[Axis] += dir[Axis];
-  }
-  bool at_end() const { return k[0] == end[0] && k[1] == end[1] && k[2] == end[2]; }
-  bool visit() {
-    // OctoMap only asserts here; a walk that would leave the key range ends instead.
-    if (((k[0] | k[1] | k[2]) & ~(Key::extent - 1)) != 0) return false;
-    using I = typename Key::index_type;
-    const Key key(static_cast<I>(k[0]), static_cast<I>(k[1]), static_cast<I>(k[2]));
-    visit_fn(key);
-    return true;
-  }
-};
-
-}  // namespace detail
 
 /// Calls visit(key) for every voxel the segment origin -> end crosses, origin voxel included,
 /// end voxel excluded. Returns false, visiting nothing, when origin or end is not finite or out
@@ -197,11 +202,15 @@ bool for_each_ray_key(const Grid<Key>& grid, const Point3f& origin, const Point3
   const RayStart start = start_ray(grid, origin, end, w);
   if (start != RayStart::walk) return start == RayStart::same_voxel;
   visit(static_cast<const Key&>(w.origin));
-  detail::KeyCursor<Key, Visit> cursor{{w.origin[0], w.origin[1], w.origin[2]},
-                                       {w.step[0], w.step[1], w.step[2]},
-                                       {w.end[0], w.end[1], w.end[2]},
-                                       visit};
-  walk_ray(w.state, cursor);
+  KeyPosition at{{w.origin[0], w.origin[1], w.origin[2]},
+                 {w.step[0], w.step[1], w.step[2]},
+                 {w.end[0], w.end[1], w.end[2]}};
+  walk_ray(w.state, at, [&](const KeyPosition& p) {
+    if (!p.in_range(Key::extent)) return false;
+    using I = typename Key::index_type;
+    visit(Key(static_cast<I>(p.k[0]), static_cast<I>(p.k[1]), static_cast<I>(p.k[2])));
+    return true;
+  });
   return true;
 }
 

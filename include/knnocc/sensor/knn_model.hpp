@@ -74,8 +74,10 @@ struct KnnModelParams {
 
 class KnnModel {
  public:
-  /// The model needs the map point cloud's k-NN statistics (Mapper keeps a KnnTracker for it).
+  /// The model needs the map point cloud's k-NN statistics (a rated model,
+  /// sensor/sensor_model.hpp): Mapper keeps a tracker_type for it, made from tracker_params().
   static constexpr bool uses_map_cloud = true;
+  using tracker_type = KnnTracker<>;
   /// Lowest probability an endpoint gets (keeps logit finite).
   static constexpr double kMinProb = 1e-3;
   /// sigma <= kFlatSigma * |mu| counts as sigma == 0 (rounding of equal values).

@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "../../core/point_traits.hpp"
-#include "../../detail/huge_pages.hpp"
+#include "../../core/detail/huge_pages.hpp"
 #include "../atomic_file.hpp"
 #include "../error.hpp"
 

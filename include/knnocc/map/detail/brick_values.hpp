@@ -15,7 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "simd_support.hpp"
+#include "../../core/detail/simd_support.hpp"
 
 namespace knnocc::detail {
 

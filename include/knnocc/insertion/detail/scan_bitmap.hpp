@@ -1,12 +1,13 @@
 #pragma once
 // ScanBitmap: one bit (or one byte) per voxel of a brick-aligned box of keys, the per-scan
-// scratch of ScanInserter when a scan's box is small enough (see ScanInserter::dense_fits).
+// scratch of ScanInserter when a scan's box is small enough (see plan_dense_box, dense_box.hpp).
 //
 // Voxel ((z - lo_z) * ny + (y - lo_y)) * nx + (x - lo_x), x fastest, so a step along an axis is a
 // constant offset (what the ray walk needs). With bits, the 8 bits of a brick row (fixed y and z)
 // are one byte of a 64-bit word; with bytes (a byte is 0 or 1), the 8 bytes of a brick row are one
 // 64-bit word. Either way a brick's VoxelMask is its 64 rows, gathered by take_brick_row(). Bytes
-// cost eight times the memory but are marked by a plain store (detail/ray_lanes.hpp, ByteMarks).
+// cost eight times the memory but are marked by a plain store (raycast/detail/linear_ray.hpp,
+// ByteMarks).
 
 #include <algorithm>
 #include <cstdint>
@@ -14,9 +15,9 @@
 #include <memory>
 #include <new>
 
-#include "../core/config.hpp"
-#include "../map/brick.hpp"
-#include "huge_pages.hpp"
+#include "../../core/config.hpp"
+#include "../../core/detail/huge_pages.hpp"
+#include "../../map/brick.hpp"
 
 namespace knnocc::detail {
 

@@ -21,7 +21,7 @@
 #include <thread>
 #include <vector>
 
-#include "../core/config.hpp"
+#include "../../core/config.hpp"
 
 namespace knnocc::detail {
 

@@ -10,9 +10,9 @@
 
 #include <cstdint>
 
-#include "../core/config.hpp"
-#include "../core/grid.hpp"
-#include "../core/point3.hpp"
+#include "../config.hpp"
+#include "../grid.hpp"
+#include "../point3.hpp"
 
 namespace knnocc::detail {
 

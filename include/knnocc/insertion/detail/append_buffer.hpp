@@ -10,7 +10,7 @@
 #include <cstddef>
 #include <type_traits>
 
-#include "huge_pages.hpp"
+#include "../../core/detail/huge_pages.hpp"
 
 namespace knnocc::detail {
 

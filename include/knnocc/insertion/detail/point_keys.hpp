@@ -10,8 +10,8 @@
 
 #include <cstdint>
 
-#include "../core/point3.hpp"
-#include "simd_support.hpp"
+#include "../../core/detail/simd_support.hpp"
+#include "../../core/point3.hpp"
 
 namespace knnocc::detail {
 

@@ -1,8 +1,9 @@
 #pragma once
 // Which vector code paths this build has, and whether the CPU can run them: KNNOCC_AVX2_LANES
-// (x86-64 with GCC or clang, unless KNNOCC_NO_SIMD is defined) and cpu_has_avx2(), a run-time
-// check. The vector code itself is in the headers named after what it computes (ray_lanes.hpp,
-// point_keys.hpp, brick_values.hpp); elsewhere they fall back to scalar code with the same results.
+// (x86-64 with GCC or clang, unless KNNOCC_NO_SIMD is defined), and cpu_has_avx2() and
+// cpu_has_avx512(), run-time checks. The vector code itself is in the headers named after what it
+// computes (raycast/detail/walk_avx2.hpp and walk_avx512.hpp, insertion/detail/point_keys.hpp,
+// map/detail/brick_values.hpp); elsewhere they fall back to scalar code with the same results.
 
 #if !defined(KNNOCC_NO_SIMD) && (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__)
 #define KNNOCC_AVX2_LANES 1
@@ -20,6 +21,16 @@ inline bool cpu_has_avx2() {
   return true;
 #else
   static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi2");
+  return has;
+#endif
+}
+
+/// AVX-512F (and BMI2), known at compile time or checked once at run time.
+inline bool cpu_has_avx512() {
+#if defined(__AVX512F__) && defined(__BMI2__)
+  return true;
+#else
+  static const bool has = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("bmi2");
   return has;
 #endif
 }

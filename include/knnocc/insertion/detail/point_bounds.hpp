@@ -12,7 +12,7 @@
 #include <cstddef>
 #include <cstring>
 
-#include "../core/point3.hpp"
+#include "../../core/point3.hpp"
 
 namespace knnocc::detail {
 

@@ -18,7 +18,7 @@
 #include <new>
 #include <vector>
 
-#include "../core/config.hpp"
+#include "../config.hpp"
 
 #if defined(__linux__) && !defined(KNNOCC_NO_HUGE_PAGES)
 #include <sys/mman.h>

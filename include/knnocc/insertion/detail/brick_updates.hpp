@@ -1,0 +1,196 @@
+#pragma once
+// Phase 3 of a scan (ScanInserter): apply. The touched bricks with their hit and miss masks (the
+// threads' scratches OR-ed) are gathered in groups whose concatenation is z, y, x brick order,
+// whatever the path or the thread count; the missing map bricks are created in that order by one
+// thread (the map's storage order never depends on the path or the thread count); then every
+// touched voxel gets exactly one update, occupied first (occupied wins), each brick by one thread.
+
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "../../map/brick.hpp"
+#include "../../map/occupancy_map.hpp"
+#include "hashed_marks.hpp"
+#include "scan_bitmap.hpp"
+#include "thread_scratch.hpp"
+#include "work_queue.hpp"
+
+namespace knnocc::detail {
+
+/// One touched brick of a scan and, once created, its map slot.
+struct BrickUpdate {
+  std::uint64_t coord;
+  std::uint32_t slot;
+  VoxelMask hit, miss;
+};
+
+/// The touched bricks of a scan in groups (memory kept between scans); the groups' concatenation
+/// is in z, y, x brick order.
+struct BrickGroups {
+  std::vector<std::vector<BrickUpdate>> groups;
+  std::size_t count = 0;  // groups in use
+
+  void start(std::size_t n) {
+    if (groups.size() < n) groups.resize(n);
+    for (std::size_t g = 0; g < n; ++g) groups[g].clear();
+    count = n;
+  }
+  std::size_t bricks() const {
+    std::size_t n = 0;
+    for (std::size_t g = 0; g < count; ++g) n += groups[g].size();
+    return n;
+  }
+};
+
+/// The log-odds a scan applies: `hit` to endpoint voxels (unless the hits are rated, each voxel
+/// then receiving its own sum: rated_sums.hpp), `miss` to the voxels rays cross.
+struct ScanValues {
+  float hit = 0.0f, miss = 0.0f;
+  bool rated = false;
+};
+
+/// Gathers the touched bricks of the threads' dense bitmaps (each thread's hit and miss maps of
+/// the same box) into `out`, clearing the bitmaps: groups of brick rows, taken by the team's
+/// threads in turn (rows differ, so threads share no words).
+template <class Key>
+void gather_dense(Team& team, ThreadScratches& scratch, BrickGroups& out) {
+  using layout = BrickLayout<Key>;
+  const unsigned threads = team.size();
+  const ScanBitmap& shape = scratch[0]->hit;  // every bitmap has the scan's box
+  const std::int64_t nbx = shape.bricks(0), nby = shape.bricks(1), nrows = nby * shape.bricks(2);
+  const std::int64_t* lo = shape.lo();
+  const auto groups =
+      static_cast<std::size_t>(std::min<std::int64_t>(nrows, threads == 1 ? 1 : 8 * threads));
+  const auto rows_per_group = (static_cast<std::size_t>(nrows) + groups - 1) / groups;
+  out.start(groups);
+  // One thread, one group: room for every brick of the box (capped), so a cold process does not
+  // grow it through a doubling series of copies and fresh pages (the reserve stays untouched until
+  // written). Not with threads: many large reserves made the threads' mapping churn.
+  if (groups == 1)
+    out.groups[0].reserve(
+        static_cast<std::size_t>(std::min<std::int64_t>(std::int64_t{1} << 16, nrows * nbx)));
+  for (unsigned t = 0; t < threads; ++t) {  // here, not in the job: a thread may get no group
+    scratch[t]->row_hit.resize(static_cast<std::size_t>(nbx));
+    scratch[t]->row_miss.resize(static_cast<std::size_t>(nbx));
+  }
+  WorkQueue queue(groups);
+  auto gather = [&](unsigned w) {
+    ThreadScratch& mine = *scratch[w];
+    for (std::size_t g; queue.take(g);) {
+      const auto first = static_cast<std::int64_t>(g * rows_per_group);
+      const auto last = std::min(nrows, static_cast<std::int64_t>((g + 1) * rows_per_group));
+      for (std::int64_t r = first; r < last; ++r) {
+        const std::int64_t by = r % nby, bz = r / nby;
+        for (unsigned t = 0; t < threads; ++t) {
+          scratch[t]->hit.take_brick_row(by, bz, mine.row_hit.data());
+          scratch[t]->miss.take_brick_row(by, bz, mine.row_miss.data());
+        }
+        for (std::int64_t bx = 0; bx < nbx; ++bx) {
+          VoxelMask& h = mine.row_hit[static_cast<std::size_t>(bx)];
+          VoxelMask& m = mine.row_miss[static_cast<std::size_t>(bx)];
+          if (!h.any() && !m.any()) continue;
+          out.groups[g].push_back(
+              {layout::pack_brick((lo[0] >> kBrickBits) + bx, (lo[1] >> kBrickBits) + by,
+                                  (lo[2] >> kBrickBits) + bz),
+               0, h, m});
+          h.clear();
+          m.clear();
+        }
+      }
+    }
+  };
+  team.run(gather);
+  for (unsigned t = 0; t < threads; ++t) {
+    scratch[t]->hit.mark_clean();
+    scratch[t]->miss.mark_clean();
+  }
+}
+
+/// Gathers the hashed scratch into `out` (groups of 256 bricks in z, y, x order), leaving every
+/// scratch empty: the other threads' miss masks are OR-ed into the first thread's, whose bricks
+/// hold the hits. `order` is scratch.
+template <class Key>
+void gather_hashed(ThreadScratches& scratch, unsigned threads, std::vector<std::uint32_t>& order,
+                   BrickGroups& out) {
+  using layout = BrickLayout<Key>;
+  HashedMarks& first = scratch[0]->hashed;
+  for (unsigned t = 1; t < threads; ++t) {
+    first.merge_misses(scratch[t]->hashed);
+    scratch[t]->hashed.clear();
+  }
+  order.clear();
+  for (std::size_t j = 0; j < first.size(); ++j) order.push_back(static_cast<std::uint32_t>(j));
+  auto zyx = [&](std::uint32_t j) {
+    const auto o = layout::origin_of(first[j].coord);
+    return std::array<std::int64_t, 3>{o[2], o[1], o[0]};
+  };
+  std::sort(order.begin(), order.end(),
+            [&](std::uint32_t a, std::uint32_t b) { return zyx(a) < zyx(b); });
+  constexpr std::size_t kGroup = 256;
+  out.start((order.size() + kGroup - 1) / kGroup);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const BrickMasks& b = first[order[k]];
+    out.groups[k / kGroup].push_back({b.coord, 0, b.hit, b.miss});
+  }
+  first.clear();
+}
+
+/// Creates the missing map bricks in group order (serially: the map's value pool is serial), then
+/// updates every touched voxel once, occupied first: hit voxels get values.hit (unless rated),
+/// miss voxels that are not hits get values.miss. Groups are updated by the team's threads in
+/// turn. Returns the voxels updated (occupied: hit updates,
+/// not counting rated ones; free: miss updates).
+template <class Key>
+UpdateCounts apply_updates(OccupancyMap<Key>& map, BrickGroups& bricks, const ScanValues& values,
+                           Team& team, ThreadScratches& scratch) {
+  if (map.num_bricks() == 0) map.reserve_bricks(bricks.bricks());  // a fresh map: all are new
+  for (std::size_t g = 0; g < bricks.count; ++g)
+    for (BrickUpdate& u : bricks.groups[g]) {
+      u.slot = map.brick_slot(u.coord);
+      map.prepare_values(map.brick_at(u.slot));
+      for (std::size_t i = 0; i < u.miss.w.size(); ++i) u.miss.w[i] &= ~u.hit.w[i];  // hit wins
+    }
+  const bool hits_here = !values.rated;  // rated hits carry their own sums
+  UpdateCounts total;
+  if (map.change_detection_enabled()) {  // records per voxel, in one thread
+    for (std::size_t g = 0; g < bricks.count; ++g)
+      for (const BrickUpdate& u : bricks.groups[g]) {
+        auto& brick = map.brick_at(u.slot);
+        if (hits_here) {
+          map.update_masked(brick, u.hit, values.hit);
+          total.occupied += static_cast<std::size_t>(u.hit.count());
+        }
+        map.update_masked(brick, u.miss, values.miss);
+        total.free += static_cast<std::size_t>(u.miss.count());
+      }
+    return total;
+  }
+  WorkQueue queue(bricks.count);
+  auto update = [&](unsigned w) {
+    UpdateCounts& c = scratch[w]->counts;
+    c = UpdateCounts{};
+    for (std::size_t g; queue.take(g);)
+      for (const BrickUpdate& u : bricks.groups[g]) {
+        auto& brick = map.brick_at(u.slot);
+        if (hits_here) {
+          c.added += map.update_brick(brick, u.hit, values.hit);
+          c.occupied += static_cast<std::size_t>(u.hit.count());
+        }
+        c.added += map.update_brick(brick, u.miss, values.miss);
+        c.free += static_cast<std::size_t>(u.miss.count());
+      }
+  };
+  team.run(update);
+  for (unsigned t = 0; t < team.size(); ++t) {
+    const UpdateCounts& c = scratch[t]->counts;
+    total.occupied += c.occupied;
+    total.free += c.free;
+    map.add_known(c.added);
+  }
+  return total;
+}
+
+}  // namespace knnocc::detail

@@ -1,0 +1,93 @@
+#pragma once
+// The hashed scratch of a scan (ScanInserter, phase 2, when the dense box does not fit): one
+// thread's touched bricks, each with a hit and a miss mask, found through a hash of brick
+// coordinates. Slower than the dense scratch per voxel, but its size follows the voxels the rays
+// touch, not the scan's box.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "../../core/detail/flat_index.hpp"
+#include "../../map/brick.hpp"
+#include "../../raycast/dda.hpp"
+
+namespace knnocc::detail {
+
+/// A touched brick of the hashed scratch.
+struct BrickMasks {
+  std::uint64_t coord = 0;  // packed brick coordinate (BrickLayout)
+  VoxelMask hit, miss;
+};
+
+/// One thread's touched bricks (memory kept between scans).
+class HashedMarks {
+ public:
+  std::size_t size() const { return used_; }
+  const BrickMasks& operator[](std::size_t i) const { return bricks_[i]; }
+
+  /// The brick `coord`, added with empty masks when new. References stay valid until the next
+  /// brick is added.
+  BrickMasks& at(std::uint64_t coord) {
+    if (last_ != FlatIndex::kNone && coord == last_coord_) return bricks_[last_];
+    bool inserted = false;
+    last_ = index_.find_or_insert(coord, static_cast<std::uint32_t>(used_), inserted);
+    last_coord_ = coord;
+    if (inserted) {
+      if (used_ == bricks_.size()) bricks_.emplace_back();
+      BrickMasks& b = bricks_[used_++];
+      b.coord = coord;
+      b.hit.clear();
+      b.miss.clear();
+    }
+    return bricks_[last_];
+  }
+  /// ORs other's miss masks into this scratch's bricks.
+  void merge_misses(const HashedMarks& other) {
+    for (std::size_t j = 0; j < other.used_; ++j) {
+      BrickMasks& into = at(other.bricks_[j].coord);
+      for (std::size_t i = 0; i < into.miss.w.size(); ++i)
+        into.miss.w[i] |= other.bricks_[j].miss.w[i];
+    }
+  }
+  void clear() {
+    used_ = 0;
+    index_.clear();
+    last_ = FlatIndex::kNone;
+  }
+
+ private:
+  FlatIndex index_;  // brick coordinate -> index in bricks_
+  std::vector<BrickMasks> bricks_;
+  std::size_t used_ = 0;
+  std::uint64_t last_coord_ = 0;
+  std::uint32_t last_ = FlatIndex::kNone;
+};
+
+/// walk_ray()'s visitor for the hashed scratch: marks the voxel in its brick's miss mask, looking
+/// the brick up only when the walk enters another brick (a Key object per voxel went through
+/// memory and stalled the CPU). Counts the visits.
+template <class Key>
+struct HashedMissMarks {
+  HashedMarks& marks;
+  std::size_t visits = 0;
+  VoxelMask* miss = nullptr;  // of brick `coord`
+  std::uint64_t coord = 0;
+
+  bool operator()(const KeyPosition& p) {
+    if (!p.in_range(Key::extent)) return false;
+    const std::uint64_t c = BrickLayout<Key>::pack_brick(p.k[0] >> kBrickBits, p.k[1] >> kBrickBits,
+                                                         p.k[2] >> kBrickBits);
+    if (!miss || c != coord) {
+      miss = &marks.at(c).miss;
+      coord = c;
+    }
+    constexpr std::int64_t m = kBrickEdge - 1;
+    miss->set(static_cast<int>((p.k[0] & m) | ((p.k[1] & m) << kBrickBits) |
+                               ((p.k[2] & m) << (2 * kBrickBits))));
+    ++visits;
+    return true;
+  }
+};
+
+}  // namespace knnocc::detail

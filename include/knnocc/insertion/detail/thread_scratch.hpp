@@ -1,0 +1,37 @@
+#pragma once
+// ThreadScratch: what one of ScanInserter's threads keeps between scans, so that a warmed-up
+// inserter allocates nothing per scan: its share of the collected points (phase 1), its dense
+// bitmaps or hashed masks and its ray block (phase 2), its buffers and counts for the apply
+// (phase 3). Each thread's scratch is a separate allocation, so threads share no cache lines.
+
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+#include "../../map/brick.hpp"
+#include "../../raycast/detail/ray_block.hpp"
+#include "collect.hpp"
+#include "hashed_marks.hpp"
+#include "scan_bitmap.hpp"
+
+namespace knnocc::detail {
+
+/// What one thread's share of the apply did.
+struct UpdateCounts {
+  std::size_t occupied = 0, free = 0, added = 0;
+};
+
+struct ThreadScratch {
+  ScanPart part;         // collect: this thread's share of the points
+  PointBounds bounds;    // collect, chunked scans: the bounds of its share
+  ScanBitmap hit, miss;  // walk, dense scratch: endpoints and free voxels
+  HashedMarks hashed;    // walk, hashed scratch
+  std::unique_ptr<RayBlock> block = std::make_unique<RayBlock>();  // walk: rays set up
+  std::size_t visits = 0;                                          // walk: voxels visited
+  std::vector<VoxelMask> row_hit, row_miss;  // apply: one row of bricks of the dense scratch
+  UpdateCounts counts;                       // apply
+};
+
+using ThreadScratches = std::vector<std::unique_ptr<ThreadScratch>>;
+
+}  // namespace knnocc::detail

@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <vector>
 
-#include <knnocc/map/scan_inserter.hpp>
+#include <knnocc/insertion/scan_inserter.hpp>
 
 struct LidarReturn {  // has x, y, z: usable as is
   float x, y, z;

@@ -2,7 +2,7 @@
 #include <cstdio>
 #include <vector>
 
-#include <knnocc/map/scan_inserter.hpp>
+#include <knnocc/insertion/scan_inserter.hpp>
 
 int main() {
   knnocc::OccupancyMap<> map(0.1);  // 0.1 m voxels, OctoMap's clamping defaults

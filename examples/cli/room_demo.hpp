@@ -13,7 +13,7 @@
 #include <vector>
 
 #include <knnocc/io/voxel_list.hpp>
-#include <knnocc/map/scan_inserter.hpp>
+#include <knnocc/insertion/scan_inserter.hpp>
 
 #include "args.hpp"
 

@@ -32,7 +32,10 @@ knnocc_in_prefix(incdir "${INSTALL_INCLUDEDIR}")
 foreach(_f
     "${cmakedir}/knnoccConfig.cmake"
     "${cmakedir}/knnoccConfigVersion.cmake"
-    "${cmakedir}/knnoccTargets.cmake"
+    "${cmakedir}/knnocc-core-targets.cmake"
+    "${cmakedir}/knnocc-knn-targets.cmake"
+    "${cmakedir}/knnocc-io-targets.cmake"
+    "${cmakedir}/knnocc-knnocc-targets.cmake"
     "${pcdir}/knnocc.pc"
     "${incdir}/knnocc/version.hpp"
     "${incdir}/knnocc/knnocc.hpp")

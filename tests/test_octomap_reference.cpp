@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
+#include <knnocc/insertion/scan_inserter.hpp>
 #include <knnocc/io/sequence.hpp>
 #include <knnocc/io/xyz.hpp>
-#include <knnocc/insertion/scan_inserter.hpp>
 #include <knnocc/raycast/cast_ray.hpp>
 
 #include "test_support.hpp"

@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
+#include <knnocc/insertion/scan_inserter.hpp>
 #include <knnocc/io/octomap_tree.hpp>
 #include <knnocc/io/xyz.hpp>
-#include <knnocc/insertion/scan_inserter.hpp>
 
 #include "test_support.hpp"
 

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include <knnocc/io/voxel_list.hpp>
 #include <knnocc/insertion/scan_inserter.hpp>
+#include <knnocc/io/voxel_list.hpp>
 
 #include "args.hpp"
 

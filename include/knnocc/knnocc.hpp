@@ -12,9 +12,9 @@
 #include "core/point3.hpp"
 #include "core/point_traits.hpp"
 
+#include "insertion/scan_inserter.hpp"
 #include "map/brick.hpp"
 #include "map/occupancy_map.hpp"
-#include "insertion/scan_inserter.hpp"
 
 #include "raycast/cast_ray.hpp"
 #include "raycast/dda.hpp"

@@ -26,12 +26,12 @@
 #include <vector>
 
 #include "../core/config.hpp"
+#include "../core/detail/flat_index.hpp"
 #include "../core/grid.hpp"
 #include "../core/key.hpp"
 #include "../core/log_odds.hpp"
-#include "detail/brick_values.hpp"
-#include "../core/detail/flat_index.hpp"
 #include "brick.hpp"
+#include "detail/brick_values.hpp"
 #include "value_pool.hpp"
 
 namespace knnocc {

@@ -21,8 +21,8 @@
 #include <utility>
 #include <vector>
 
-#include "../../core/point_traits.hpp"
 #include "../../core/detail/huge_pages.hpp"
+#include "../../core/point_traits.hpp"
 #include "../atomic_file.hpp"
 #include "../error.hpp"
 

@@ -127,7 +127,7 @@ TEST_CASE("octomap_reference.fr079_scan") {
 TEST_CASE("octomap_reference.tum_sequence") {
   const auto scans = tum_scans();
   if (scans.empty()) {
-    MESSAGE("skipped: ../shared/data/tum_fr2_pioneer_slam2 not available");
+    knnocc::test::skip("skipped: ../shared/data/tum_fr2_pioneer_slam2 not available");
     return;
   }
   REQUIRE(scans.size() == 10);
@@ -139,7 +139,7 @@ TEST_CASE("octomap_reference.tum_sequence") {
   octomap_insert(tree, scans);
   expect_same_map(map, tree);
 #else
-  MESSAGE("liboctomap not found: only the knnocc side ran");
+  knnocc::test::skip("liboctomap not found: only the knnocc side ran");
 #endif
 }
 

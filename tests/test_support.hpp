@@ -56,12 +56,13 @@ inline std::string scan_dat_path() {
   return {};
 }
 
-/// scan.dat's points (88,206), or empty after a MESSAGE saying why the test is skipped (the data
+/// scan.dat's points (88,206), or empty after skip() says why the test cannot run (the data
 /// folder or the ctest fixture that decompresses it is missing).
 inline std::vector<Point3f> scan_dat_points_or_skip() {
   const std::string path = scan_dat_path();
   if (path.empty()) {
-    MESSAGE("skipped: scan.dat not available (needs ../shared/data and the ctest fixture)");
+    knnocc::test::skip(
+        "skipped: scan.dat not available (needs ../shared/data and the ctest fixture)");
     return {};
   }
   return io::read_xyz(path).points;
@@ -118,10 +119,5 @@ struct Scan {
 };
 
 using Rng = std::mt19937_64;
-
-/// Largest single operator-new request since the last reset (tests/test_alloc.cpp replaces the
-/// global operator new of the test executable).
-std::size_t largest_allocation();
-void reset_largest_allocation();
 
 }  // namespace knnocc::test

@@ -2,11 +2,11 @@
 // Large blocks of memory that a writer fills densely (the map's value slabs, a scan's ray
 // buffers), mapped 2 MB at a time where the system allows it.
 //
-// Every fresh 4 KB page costs a page fault: ~2 us on bare metal, 10-13 us measured on the
-// project's virtual machine, where faults dominated inserting a fresh map (a 42 MB map is 10,000
-// faults). On Linux a block of at least kHugeMin (1 MB) is rounded up to whole 2 MB pages, taken
-// 2 MB aligned from mmap and advised as transparent huge pages (MADV_HUGEPAGE, honoured when THP
-// is "always" or "madvise"): one fault then maps 2 MB (0.25 us per 4 KB measured). Smaller
+// Every fresh 4 KB page costs a page fault, and on virtual machines faults can dominate inserting
+// a fresh map (a 42 MB map is 10,000 faults; bench/NOTES.md has the measured costs). On Linux a
+// block of at least kHugeMin (1 MB) is rounded up to whole 2 MB pages, taken 2 MB aligned from
+// mmap and advised as transparent huge pages (MADV_HUGEPAGE, honoured when THP is "always" or
+// "madvise"): one fault then maps 2 MB. Smaller
 // blocks, other systems, and builds with KNNOCC_NO_HUGE_PAGES defined use malloc. Only for memory
 // that is filled densely: a huge page is resident as a whole once any byte of it is touched, so a
 // block costs up to 2 MB more resident memory than its size. Define KNNOCC_NO_HUGE_PAGES for the

@@ -24,11 +24,10 @@ namespace knnocc::detail {
 class ScanBitmap {
  public:
   /// From this size on a bitmap takes whole 2 MB huge pages (huge_pages.hpp), with the rest of
-  /// the page as room for larger boxes. Its 32 or more fresh 4 KB pages would each cost a fault
-  /// (2 us on bare metal, 11 us measured on the project's virtual machine) against about 0.1 ms
-  /// to clear a huge page, and the boxes of a sequence grow (TUM at 0.05 m: 91 KB to 364 KB),
-  /// so smaller blocks were reallocated and faulted in again. Resident memory: up to 2 MB a
-  /// bitmap, two per inserter thread.
+  /// the page as room for larger boxes. Its 32 or more fresh 4 KB pages would each cost a page
+  /// fault, together more than clearing one huge page, and the boxes of a sequence grow, so
+  /// smaller blocks would be reallocated and faulted in again (bench/NOTES.md has the figures).
+  /// Resident memory: up to 2 MB a bitmap, two per inserter thread.
   static constexpr std::size_t kHugeBitmap = std::size_t{128} << 10;
 
   /// Makes this the all-zero bitmap of the box [lo, lo + size) (lo a multiple of 8, size a

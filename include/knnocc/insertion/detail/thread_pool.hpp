@@ -6,11 +6,11 @@
 // is rethrown by run() once every worker is done with the job.
 //
 // One scan is a few runs in quick succession, and waking a thread that sleeps on a condition
-// variable took 16 us per run on the project's virtual machine. So between runs the workers
-// first spin (for kSpin) on the run counter, and only then sleep; run() likewise spins a while
-// for the workers to finish before it sleeps. Idle workers stop using the CPU after kSpin. A pool
-// of more threads than the machine has hardware threads never spins: a spinning worker would take
-// a core from a thread with work.
+// variable costs more than a short run (bench/NOTES.md has the figures). So between runs the
+// workers first spin (for kSpin) on the run counter, and only then sleep; run() likewise spins a
+// while for the workers to finish before it sleeps. Idle workers stop using the CPU after kSpin. A
+// pool of more threads than the machine has hardware threads never spins: a spinning worker would
+// take a core from a thread with work.
 
 #include <atomic>
 #include <chrono>

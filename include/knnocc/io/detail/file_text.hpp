@@ -109,7 +109,7 @@ bool parse_real_token(const char* p, const char* e, T& out) {
     if (p == e || *p == '-' || *p == '+') return false;
   }
 #if defined(__cpp_lib_to_chars)
-  // from_chars: locale-independent and ~4x faster than strtod on this data.
+  // from_chars: locale-independent and several times faster than strtod (bench/NOTES.md).
   const std::from_chars_result r = std::from_chars(p, e, out);
   if (r.ec == std::errc() && r.ptr == e) return true;
   if (r.ec != std::errc::result_out_of_range) return false;
@@ -197,9 +197,9 @@ std::size_t scan_line_numbers(const std::string& path, std::size_t line, const c
 // Fixed "%.6f" formatting into buf (at least 350 bytes: the widest double); returns the end.
 // Output is identical to printf("%.6f") (correct rounding, ties to even, "-0.000000").
 inline char* format_fixed6(char* buf, char* buf_end, double v) {
-  // Fast path (~5x faster than to_chars): for |v| < 1e6 the product v*1e6 is below 1e12, so its
-  // rounding error is under 2^-13. Unless it lies within 1e-3 of a .5 tie, the nearest integer
-  // of the computed product is the nearest integer of the exact one: the printf result.
+  // Fast path (several times faster than to_chars): for |v| < 1e6 the product v*1e6 is below 1e12,
+  // so its rounding error is under 2^-13. Unless it lies within 1e-3 of a .5 tie, the nearest
+  // integer of the computed product is the nearest integer of the exact one: the printf result.
   if (std::fabs(v) < 1e6) {
     const double scaled = std::fabs(v) * 1e6;
     const double r = std::floor(scaled + 0.5);

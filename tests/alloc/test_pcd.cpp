@@ -1,5 +1,4 @@
-// PCD files (ascii, binary, binary_compressed) and the LZF codec: round trips, hand-built byte
-// streams decoded against values derived from the format description, and malformed files.
+// PCD clouds (io/pcd.hpp): every encoding, ids and NaN, organised clouds, malformed files.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -15,7 +14,8 @@
 #include <knnocc/io/pcd.hpp>
 #include <knnocc/io/point_file.hpp>
 
-#include "test_support.hpp"
+#include "../test_support.hpp"
+#include "counting_new.hpp"
 
 namespace io = knnocc::io;
 using knnocc::Point3f;
@@ -26,13 +26,6 @@ using knnocc::test::write_file;
 namespace {
 
 std::string pcd_file(const std::string& name) { return knnocc::test::scratch_file("pcd", name); }
-
-std::string decode(const std::vector<unsigned char>& in, std::size_t n, std::string& problem) {
-  std::string out(n, '\0');
-  problem = io::detail::lzf_decompress(in.data(), in.size(),
-                                       reinterpret_cast<unsigned char*>(&out[0]), n);
-  return out;
-}
 
 bool same_point(const Point3f& a, const Point3f& b) {
   auto eq = [](float x, float y) { return (std::isnan(x) && std::isnan(y)) || x == y; };
@@ -60,55 +53,6 @@ const std::string kXyzHeader =
     "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n";
 
 }  // namespace
-
-TEST_CASE("lzf.hand-built stream decodes as the format says") {
-  // literal "abcd", then a reference of 12 bytes at distance 4 (length 12 -> 7 + 3),
-  // literal "xy", then a 4-byte reference at distance 2 (overlapping copy).
-  const std::vector<unsigned char> in = {0x03, 'a',  'b', 'c', 'd',  0xE0, 0x03,
-                                         0x03, 0x01, 'x', 'y', 0x40, 0x01};
-  std::string problem;
-  CHECK(decode(in, 22, problem) == "abcdabcdabcdabcdxyxyxy");
-  CHECK(problem.empty());
-  decode(in, 21, problem);
-  CHECK(problem.find("more bytes than declared") != std::string::npos);
-  decode(in, 23, problem);
-  CHECK(problem.find("decodes to 22 bytes") != std::string::npos);
-  decode({0x20, 0x05}, 3, problem);  // a reference before anything was written
-  CHECK(problem.find("before the start") != std::string::npos);
-  decode({0x05, 'a', 'b'}, 6, problem);  // literal run cut off
-  CHECK(problem.find("past the end") != std::string::npos);
-  decode({0x00, 'a', 0xE0}, 10, problem);  // long reference cut off
-  CHECK(problem.find("cut off") != std::string::npos);
-}
-
-TEST_CASE("lzf.compress then decompress is the identity") {
-  knnocc::test::Rng rng(11);
-  std::vector<std::vector<unsigned char>> inputs = {{}, {7}, {1, 2}, {1, 2, 3}};
-  std::vector<unsigned char> runs(100000, 0x55);  // long runs: references of 264 bytes
-  inputs.push_back(runs);
-  std::vector<unsigned char> noise(50000);
-  for (auto& b : noise) b = static_cast<unsigned char>(rng());
-  inputs.push_back(noise);
-  std::vector<unsigned char> far(30000);  // repeats at distances around the 8192 limit
-  for (std::size_t i = 0; i < far.size(); ++i)
-    far[i] = i < 8190 ? static_cast<unsigned char>(rng()) : far[i - 8190 - (i % 5)];
-  inputs.push_back(far);
-  std::vector<unsigned char> floats(4 * 30000);  // float coordinates of a smooth surface
-  for (std::size_t i = 0; i < 30000; ++i) {
-    const float v = std::floor(static_cast<float>(i) / 7.0f) * 0.05f;
-    std::memcpy(&floats[4 * i], &v, 4);
-  }
-  inputs.push_back(floats);
-  for (const auto& in : inputs) {
-    CAPTURE(in.size());
-    const auto packed = io::detail::lzf_compress(in.data(), in.size());
-    std::vector<unsigned char> out(in.size());
-    CHECK(io::detail::lzf_decompress(packed.data(), packed.size(), out.data(), out.size()) == "");
-    CHECK(out == in);
-    CHECK(in.size() <= packed.size() * io::detail::kLzfMaxRatio);
-  }
-  CHECK(io::detail::lzf_compress(runs.data(), runs.size()).size() < 1500);
-}
 
 TEST_CASE("pcd.round trip in every format, with ids and NaN") {
   knnocc::test::Rng rng(3);

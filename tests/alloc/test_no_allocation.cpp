@@ -1,6 +1,6 @@
-// A warmed-up ScanInserter allocates nothing: counted with a replaced global operator new
-// (which also records the largest single allocation for the IO tests) and the library's own
-// counter of large blocks (detail::big_allocations).
+// A warmed-up ScanInserter allocates nothing: counted with the replaced global operator new of
+// this binary (counting_new.hpp) and the library's own counter of large blocks
+// (detail::big_allocations).
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -13,41 +13,15 @@
 #include <knnocc/core/detail/huge_pages.hpp>
 #include <knnocc/insertion/scan_inserter.hpp>
 
-#include "test_support.hpp"
+#include "../test_support.hpp"
+#include "counting_new.hpp"
 
 namespace {
-std::atomic<std::size_t> g_allocations{0};
-std::atomic<std::size_t> g_largest{0};
 // operator new and the library's large blocks (maps' value slabs, scan scratch: huge_pages.hpp).
 std::size_t all_allocations() {
-  return g_allocations.load() + knnocc::detail::big_allocations.load();
+  return knnocc::test::allocations() + knnocc::detail::big_allocations.load();
 }
 }  // namespace
-
-namespace knnocc::test {
-// Declared in test_support.hpp: lets the IO tests check that a lying header is never believed.
-std::size_t largest_allocation() { return g_largest.load(); }
-void reset_largest_allocation() { g_largest.store(0); }
-}  // namespace knnocc::test
-
-// Not inlined: GCC 12 would otherwise pair the inlined malloc of one with the free of the other
-// (-Wmismatched-new-delete) wherever a container's new and delete meet in one function.
-#if defined(__GNUC__)
-#define KNNOCC_TEST_NOINLINE __attribute__((noinline))
-#else
-#define KNNOCC_TEST_NOINLINE
-#endif
-
-KNNOCC_TEST_NOINLINE void* operator new(std::size_t n) {
-  ++g_allocations;
-  // Racy max (another thread may store a smaller value in between): exact for the
-  // single-threaded IO tests that read it.
-  if (n > g_largest.load(std::memory_order_relaxed)) g_largest.store(n, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-KNNOCC_TEST_NOINLINE void operator delete(void* p) noexcept { std::free(p); }
-KNNOCC_TEST_NOINLINE void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 TEST_CASE("insert.no_allocation_once_warmed_up") {
   knnocc::test::Rng rng(17);

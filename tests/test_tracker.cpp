@@ -1,5 +1,5 @@
-// KnnTracker against a brute-force oracle: every point's k-NN set and s exactly, and the
-// distribution (N, mu, sigma) within 1e-9 relative, after every change set.
+// KnnTracker (knn/tracker.hpp) against brute force: random sequences, edge cases, rounding, the
+// paper's Alg. 1 policy, ties far from the origin.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include <knnocc/io/sequence.hpp>
 #include <knnocc/knn/tracker.hpp>
 
 #include "knn_oracle.hpp"
@@ -231,63 +232,6 @@ TEST_CASE("knn_tracker.paper_annulus_misses_affected_points") {
   CHECK(missed_total > 0);
 }
 
-TEST_CASE("knn_tracker.change_set_builders") {
-  std::unordered_map<std::uint64_t, Point3d> a{{1, {0, 0, 0}}, {2, {1, 0, 0}}, {3, {2, 0, 0}}};
-  std::unordered_map<std::uint64_t, Point3d> b{{2, {1, 0, 0}}, {3, {2, 0.5, 0}}, {4, {5, 0, 0}}};
-  const ChangeSet cs = knnocc::diff_by_id(a, b);
-  REQUIRE(cs.added.size() == 1);
-  CHECK(cs.added[0].id == 4);
-  CHECK(cs.removed == std::vector<std::uint64_t>{1});
-  REQUIRE(cs.moved.size() == 1);
-  CHECK(cs.moved[0].id == 3);
-  CHECK(knnocc::diff_by_id(a, b, 1.0).moved.empty());  // within tolerance
-
-  knnocc::SpatialChangeDetector det(0.5);
-  const std::vector<Point3d> c1 = {{0.1, 0.1, 0.1}, {0.2, 0.1, 0.1}, {3, 3, 3}};
-  const ChangeSet first = det.update(c1);
-  CHECK(first.added.size() == 3);
-  CHECK(first.removed.empty());
-  // Voxel of (3,3,3) empties; a new voxel appears; the first voxel stays with its old points.
-  const std::vector<Point3d> c2 = {{0.15, 0.1, 0.1}, {7, 0, 0}, {7.1, 0, 0}};
-  const ChangeSet second = det.update(c2);
-  REQUIRE(second.added.size() == 2);
-  CHECK(second.added[0].id == 3);
-  CHECK(second.added[0].p.x == 7.0);
-  CHECK(second.removed == std::vector<std::uint64_t>{2});
-  // Keyframe union: an id joins once at its first position; without ids every point is new.
-  knnocc::KeyframeUnion with_ids, without_ids;
-  const std::vector<Point3d> kf = {{0, 0, 0}, {1, 0, 0}};
-  CHECK(with_ids.add(kf, {7, 8}).added.size() == 2);
-  const ChangeSet again = with_ids.add({{5, 5, 5}, {2, 0, 0}}, {7, 9});
-  REQUIRE(again.added.size() == 1);
-  CHECK(again.added[0].id == 9);
-  CHECK(without_ids.add(kf, {}).added.size() == 2);
-  const ChangeSet fresh = without_ids.add(kf, {});
-  REQUIRE(fresh.added.size() == 2);
-  CHECK(fresh.added[0].id == 2);
-  // Non-finite entries count as absent, so an id that gets a position later is an addition.
-  const Point3d nan_p{std::nan(""), 0, 0};
-  CHECK(knnocc::diff_by_id({}, {{7, nan_p}}).empty());
-  const ChangeSet later = knnocc::diff_by_id({{7, nan_p}}, {{7, {1, 2, 3}}});
-  REQUIRE(later.added.size() == 1);
-  CHECK(later.added[0].id == 7);
-  CHECK(knnocc::diff_by_id({{7, {1, 2, 3}}}, {{7, nan_p}}).removed ==
-        std::vector<std::uint64_t>{7});
-  knnocc::KeyframeUnion nan_first;
-  CHECK(nan_first.add({nan_p}, {4}).added.empty());
-  CHECK(nan_first.add({{1, 1, 1}}, {4}).added.size() == 1);  // joins at its first finite sighting
-  CHECK(nan_first.skipped_nonfinite() == 1);
-  CHECK_THROWS_AS(nan_first.add({{2, 2, 2}}, {}), std::invalid_argument);  // ids, then none
-  // Feeding the tracker the detector's changes keeps a consistent cloud.
-  knnocc::TrackerParams params;
-  params.k = 1;
-  knnocc::KnnTracker<> tr(params);
-  tr.apply(first);
-  tr.apply(second);
-  CHECK(tr.size() == 4);
-  CHECK(tr.s(3) == doctest::Approx(0.1));
-}
-
 TEST_CASE("knn_tracker.tree_ties_match_brute_force_far_from_the_origin") {
   // A micro-cluster (1e-7 m) a million metres from the origin, seen from points spread over
   // 1e9 m: nanoflann's incremental box bound carries several ulps of rounding, so exact ties
@@ -331,4 +275,34 @@ TEST_CASE("knn_tracker.tree_ties_match_brute_force_far_from_the_origin") {
   }
   MESSAGE(queries << " k-NN queries compared with brute force");
   CHECK(wrong == 0);
+}
+
+TEST_CASE("knn_orbslam.incremental_equals_brute_force") {
+  const std::string dir = knnocc::test::data_path("orbslam2_stereo_keyframes");
+  if (dir.empty()) {
+    knnocc::test::skip("skipped: ../shared/data/orbslam2_stereo_keyframes not available");
+    return;
+  }
+  const auto seq = knnocc::io::Sequence::open(dir);
+  REQUIRE(seq.size() == 249);
+  knnocc::TrackerParams params;
+  params.k = 8;
+  params.rebuild_min = 256;  // the static-tree rebuild path runs many times on the way
+  knnocc::KnnTracker<> tracker(params);
+  knnocc::test::Cloud cloud;  // the map cloud so far
+  knnocc::KeyframeUnion map_cloud;
+  std::vector<knnocc::Point3d> world;
+  std::vector<std::uint64_t> ids;
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    const auto kf = seq.load_cloud(i);
+    REQUIRE(kf.ids.size() == kf.points.size());
+    knnocc::io::keyframe_to_world(seq.pose(i), kf, 4.0, world, ids);
+    const knnocc::ChangeSet cs = map_cloud.add(world, ids);
+    tracker.apply(cs);
+    for (const auto& a : cs.added) cloud[a.id] = a.p;
+    CAPTURE(i);
+    knnocc::test::expect_matches(tracker, cloud);  // k-NN sets, s, N, mu, sigma
+  }
+  MESSAGE(cloud.size() << " map points within 4 m after 249 keyframes; N " << tracker.N() << " mu "
+                       << tracker.mu() << " sigma " << tracker.sigma());
 }

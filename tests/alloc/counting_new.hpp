@@ -1,0 +1,16 @@
+#pragma once
+// knnocc_alloc_tests replaces the global operator new (counting_new.cpp) to count allocations and
+// record the largest single request. It lives in a binary of its own so that the rest of the
+// suite runs on the standard allocator.
+#include <cstddef>
+
+namespace knnocc::test {
+
+/// operator-new calls since the program started.
+std::size_t allocations();
+/// Largest single operator-new request since the last reset: lets the reader tests check that a
+/// lying header is never believed.
+std::size_t largest_allocation();
+void reset_largest_allocation();
+
+}  // namespace knnocc::test

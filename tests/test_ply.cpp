@@ -1,0 +1,354 @@
+// PLY clouds (io/ply.hpp): ascii and binary, both endians, extra properties and elements, ids,
+// malformed files.
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <knnocc/io/cloud.hpp>
+#include <knnocc/io/error.hpp>
+#include <knnocc/io/ply.hpp>
+#include <knnocc/io/point_file.hpp>
+#include <knnocc/io/sequence.hpp>
+#include <knnocc/io/trajectory.hpp>
+#include <knnocc/io/voxel_list.hpp>
+#include <knnocc/io/xyz.hpp>
+
+#include "io_files.hpp"
+#include "test_support.hpp"
+
+namespace io = knnocc::io;
+namespace fs = std::filesystem;
+using knnocc::Point3f;
+using namespace knnocc::test::io_files;
+
+TEST_CASE("io.ply binary round trip") {
+  ScratchDir dir("ply_roundtrip");
+  const std::vector<Point3f> pts = sample_points();
+
+  SUBCASE("without ids") {
+    const std::string p = dir.file("cloud.ply");
+    io::write_ply(p, pts);
+    const io::Cloud c = io::read_ply(p);
+    REQUIRE(c.points.size() == pts.size());
+    CHECK(c.ids.empty());
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      CHECK(same_bits(c.points[i].x, pts[i].x));
+      CHECK(same_bits(c.points[i].y, pts[i].y));
+      CHECK(same_bits(c.points[i].z, pts[i].z));
+    }
+    CHECK(fs::file_size(p) == read_text(p).find("end_header\n") + 11 + 12 * pts.size());
+    CHECK_FALSE(fs::exists(p + ".tmp"));
+  }
+  SUBCASE("with ids") {
+    std::vector<std::uint64_t> ids;
+    for (std::size_t i = 0; i < pts.size(); ++i) ids.push_back(4000000000ull - i * 3);
+    const std::string p = dir.file("cloud_ids.ply");
+    io::write_ply(p, pts, &ids);
+    CHECK(contains(read_text(p), "property uint id\n"));
+    const io::Cloud c = io::read_ply(p);
+    REQUIRE(c.points.size() == pts.size());
+    CHECK(c.ids == ids);
+    for (std::size_t i = 0; i < pts.size(); ++i) CHECK(same_bits(c.points[i].y, pts[i].y));
+  }
+  SUBCASE("ascii writer") {
+    std::vector<std::uint64_t> ids(pts.size(), 17);
+    const std::string p = dir.file("cloud_ascii.ply");
+    io::write_ply(p, pts, &ids, /*binary=*/false);
+    CHECK(contains(read_text(p), "format ascii 1.0\n"));
+    const io::Cloud c = io::read_ply(p);
+    REQUIRE(c.points.size() == pts.size());
+    CHECK(c.ids == ids);
+    for (std::size_t i = 0; i < pts.size(); ++i) CHECK(same_bits(c.points[i].z, pts[i].z));
+  }
+  SUBCASE("empty cloud") {
+    const std::string p = dir.file("empty.ply");
+    io::write_ply(p, {});
+    CHECK(io::read_ply(p).points.empty());
+  }
+  SUBCASE("non-finite values survive") {
+    const float inf = std::numeric_limits<float>::infinity();
+    const std::vector<Point3f> odd = {{std::nanf(""), inf, -inf}, {1.0f, 2.0f, 3.0f}};
+    const std::string p = dir.file("odd.ply");
+    io::write_ply(p, odd);
+    const io::Cloud c = io::read_ply(p);
+    REQUIRE(c.points.size() == 2);
+    CHECK(std::isnan(c.points[0].x));
+    CHECK(c.points[0].y == inf);
+    CHECK(c.points[0].z == -inf);
+    CHECK(c.points[1].z == 3.0f);
+  }
+  SUBCASE("writer errors") {
+    std::vector<std::uint64_t> short_ids(3, 1);
+    const std::string p = dir.file("bad.ply");
+    CHECK_THROWS_AS(io::write_ply(p, pts, &short_ids), io::Error);
+    std::vector<std::uint64_t> big_ids(pts.size(), 1ull << 40);
+    CHECK(contains(error_of([&] { io::write_ply(p, pts, &big_ids); }), "does not fit"));
+    CHECK_FALSE(fs::exists(p));
+
+    const std::string missing = dir.file("no/such/dir/x.ply");
+    const std::string msg = error_of([&] { io::write_ply(missing, pts); });
+    CHECK(contains(msg, missing));
+    CHECK(contains(msg, "cannot create temporary file"));
+  }
+  SUBCASE("overwrite replaces atomically") {
+    const std::string p = dir.file("over.ply");
+    io::write_ply(p, pts);
+    io::write_ply(p, {Point3f{1, 2, 3}});
+    CHECK(io::read_ply(p).points.size() == 1);
+    CHECK_FALSE(fs::exists(p + ".tmp"));
+  }
+}
+
+TEST_CASE("io.ply ascii with extra properties, comments, CRLF header and a face element") {
+  ScratchDir dir("ply_ascii");
+  const std::string p = dir.file("ascii.ply");
+  write_bytes(p,
+              "ply\r\n"
+              "format ascii 1.0\r\n"
+              "comment made by hand\r\n"
+              "obj_info anything at all\r\n"
+              "element vertex 3\r\n"
+              "property double x\r\n"
+              "property uchar red\r\n"
+              "property double y\r\n"
+              "property uchar green\r\n"
+              "property uchar blue\r\n"
+              "property float64 z\r\n"
+              "property float intensity\r\n"
+              "property int32 id\r\n"
+              "element face 2\r\n"
+              "property list uchar int vertex_indices\r\n"
+              "end_header\r\n"
+              "1.5 255 -2.25 0 7 1e2 0.5 42\r\n"
+              "  +3\t1 4 2 3 -0.125 9 7\n"
+              "nan 0 inf 0 0 -inf 1 0\n"
+              "3 0 1 2\n"
+              "3 0 2 1\n");
+  const io::Cloud c = io::read_ply(p);
+  REQUIRE(c.points.size() == 3);
+  CHECK(c.points[0].x == 1.5f);
+  CHECK(c.points[0].y == -2.25f);
+  CHECK(c.points[0].z == 100.0f);
+  CHECK(c.points[1].x == 3.0f);
+  CHECK(c.points[1].y == 4.0f);
+  CHECK(c.points[1].z == -0.125f);
+  // NaN/Inf are data, not errors: the mapping layer skips them.
+  CHECK(std::isnan(c.points[2].x));
+  CHECK(std::isinf(c.points[2].y));
+  CHECK(c.points[2].z == -std::numeric_limits<float>::infinity());
+  CHECK(c.ids == std::vector<std::uint64_t>{42, 7, 0});
+}
+
+TEST_CASE("io.ply ascii element before vertex is skipped") {
+  ScratchDir dir("ply_ascii_before");
+  const std::string p = dir.file("before.ply");
+  write_bytes(p,
+              "ply\nformat ascii 1.0\n"
+              "element face 2\nproperty list uchar int vertex_indices\nproperty uchar flag\n"
+              "element vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+              "end_header\n"
+              "3 0 1 2 1\n4 0 1 2 3 0\n"
+              "1 2 3\n4 5 6\n");
+  const io::Cloud c = io::read_ply(p);
+  REQUIRE(c.points.size() == 2);
+  CHECK(c.points[1].x == 4.0f);
+  CHECK(c.points[1].z == 6.0f);
+}
+
+TEST_CASE("io.ply big-endian hand-crafted bytes") {
+  ScratchDir dir("ply_be");
+  const std::string p = dir.file("be.ply");
+  std::string bytes =
+      "ply\n"
+      "format binary_big_endian 1.0\n"
+      "element vertex 2\n"
+      "property float x\n"
+      "property float y\n"
+      "property float z\n"
+      "property ushort id\n"
+      "property uchar red\n"
+      "element face 1\n"
+      "property list uchar int vertex_indices\n"
+      "end_header\n";
+  // Vertex 0 spelled out byte by byte: 1.0f, -3.5f, 2.0f, id 258, red 9.
+  const unsigned char v0[] = {0x3F, 0x80, 0x00, 0x00, 0xC0, 0x60, 0x00, 0x00,
+                              0x40, 0x00, 0x00, 0x00, 0x01, 0x02, 0x09};
+  bytes.append(reinterpret_cast<const char*>(v0), sizeof v0);
+  put(bytes, 0.25f, true);
+  put(bytes, 1e6f, true);
+  put(bytes, -7.0f, true);
+  put(bytes, std::uint16_t{65535}, true);
+  put(bytes, std::uint8_t{1}, true);
+  put(bytes, std::uint8_t{3}, true);  // face: 3 indices
+  for (int k = 0; k < 3; ++k) put(bytes, std::int32_t{k}, true);
+  write_bytes(p, bytes);
+
+  const io::Cloud c = io::read_ply(p);
+  REQUIRE(c.points.size() == 2);
+  CHECK(c.points[0].x == 1.0f);
+  CHECK(c.points[0].y == -3.5f);
+  CHECK(c.points[0].z == 2.0f);
+  CHECK(c.points[1].x == 0.25f);
+  CHECK(c.points[1].y == 1e6f);
+  CHECK(c.points[1].z == -7.0f);
+  CHECK(c.ids == std::vector<std::uint64_t>{258, 65535});
+}
+
+TEST_CASE("io.ply binary doubles, extra properties and a scalar element before vertex") {
+  ScratchDir dir("ply_le_double");
+  for (const bool big : {false, true}) {
+    CAPTURE(big);
+    const std::string p = dir.file(big ? "be_double.ply" : "le_double.ply");
+    std::string bytes = std::string("ply\nformat ") +
+                        (big ? "binary_big_endian" : "binary_little_endian") +
+                        " 1.0\n"
+                        "element camera 2\nproperty float32 fx\nproperty int16 w\n"
+                        "element vertex 3\n"
+                        "property uint8 red\nproperty uint8 green\nproperty uint8 blue\n"
+                        "property float64 x\nproperty double y\nproperty float64 z\n"
+                        "property float intensity\nproperty int8 id\n"
+                        "element face 1\nproperty list uchar uint vertex_indices\n"
+                        "end_header\n";
+    for (int k = 0; k < 2; ++k) {
+      put(bytes, 525.0f, big);
+      put(bytes, std::int16_t{640}, big);
+    }
+    for (int i = 0; i < 3; ++i) {
+      for (int k = 0; k < 3; ++k) put(bytes, std::uint8_t{200}, big);
+      put(bytes, 0.1 * i, big);
+      put(bytes, -1.0 - i, big);
+      put(bytes, 1e300, big);  // beyond float range: becomes +inf, not UB
+      put(bytes, 0.75f, big);
+      put(bytes, std::int8_t{static_cast<std::int8_t>(100 + i)}, big);
+    }
+    put(bytes, std::uint8_t{2}, big);
+    put(bytes, std::uint32_t{0}, big);
+    put(bytes, std::uint32_t{1}, big);
+    write_bytes(p, bytes);
+
+    const io::Cloud c = io::read_ply(p);
+    REQUIRE(c.points.size() == 3);
+    CHECK(c.points[2].x == static_cast<float>(0.2));
+    CHECK(c.points[1].y == -2.0f);
+    CHECK(c.points[0].z == std::numeric_limits<float>::infinity());
+    CHECK(c.ids == std::vector<std::uint64_t>{100, 101, 102});
+  }
+}
+
+TEST_CASE("io.ply malformed files throw io::Error naming the file") {
+  ScratchDir dir("ply_bad");
+  const std::string xyz_props = "property float x\nproperty float y\nproperty float z\n";
+
+  SUBCASE("cannot open") {
+    const std::string p = dir.file("missing.ply");
+    CHECK_THROWS_AS(io::read_ply(p), io::Error);
+    const std::string msg = error_of([&] { io::read_ply(p); });
+    CHECK(contains(msg, p));
+    CHECK(contains(msg, "cannot open"));
+    const std::string d = dir.file("");
+    CHECK(contains(error_of([&] { io::read_ply(d); }), "not a regular file"));
+  }
+  SUBCASE("not a PLY") {
+    check_ply_error(dir, "notply.ply", "hello\nformat ascii 1.0\n", "not a PLY");
+    check_ply_error(dir, "plyx.ply", "plyx\n", "not a PLY");
+    check_ply_error(dir, "empty.ply", "", "not a PLY");
+  }
+  SUBCASE("format problems") {
+    check_ply_error(dir, "noformat.ply", "ply\nelement vertex 0\n" + xyz_props + "end_header\n",
+                    "no format line");
+    check_ply_error(
+        dir, "badformat.ply",
+        "ply\nformat binary_middle_endian 1.0\nelement vertex 0\n" + xyz_props + "end_header\n",
+        "unknown PLY format 'binary_middle_endian'");
+    check_ply_error(dir, "noend.ply", "ply\nformat ascii 1.0\nelement vertex 0\n" + xyz_props,
+                    "no end_header");
+    check_ply_error(dir, "keyword.ply", "ply\nformat ascii 1.0\nelemnt vertex 0\nend_header\n",
+                    "unknown PLY header keyword 'elemnt'");
+    check_ply_error(dir, "badtype.ply",
+                    "ply\nformat ascii 1.0\nelement vertex 1\nproperty float128 x\nend_header\n",
+                    "unknown PLY property type 'float128'");
+    check_ply_error(dir, "badcount.ply",
+                    "ply\nformat ascii 1.0\nelement vertex -5\n" + xyz_props + "end_header\n",
+                    "invalid element count '-5'");
+  }
+  SUBCASE("vertex layout problems") {
+    check_ply_error(dir, "novertex.ply", "ply\nformat ascii 1.0\nend_header\n",
+                    "no 'vertex' element");
+    check_ply_error(dir, "noy.ply",
+                    "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                    "property float z\nend_header\n1 2\n",
+                    "no property 'y'");
+    check_ply_error(dir, "intx.ply",
+                    "ply\nformat ascii 1.0\nelement vertex 1\nproperty int x\n"
+                    "property float y\nproperty float z\nend_header\n1 2 3\n",
+                    "'x' must be a float or double");
+    check_ply_error(dir, "floatid.ply",
+                    "ply\nformat ascii 1.0\nelement vertex 1\n" + xyz_props +
+                        "property float id\nend_header\n1 2 3 4\n",
+                    "'id' must be an integer");
+  }
+  SUBCASE("absurd vertex counts never allocate") {
+    std::string bin = "ply\nformat binary_little_endian 1.0\nelement vertex 2000000000\n" +
+                      xyz_props + "end_header\n";
+    bin.append(100, '\0');  // 100 bytes of data behind a header claiming 24 GB
+    check_ply_error(dir, "huge.ply", bin,
+                    "file truncated: header claims 2000000000 vertices but only 100 bytes of "
+                    "data");
+    check_ply_error(
+        dir, "huge_ascii.ply",
+        "ply\nformat ascii 1.0\nelement vertex 2000000000\n" + xyz_props + "end_header\n1 2 3\n",
+        "file truncated: header claims 2000000000 vertices");
+    check_ply_error(dir, "huge_before.ply",
+                    "ply\nformat binary_little_endian 1.0\nelement junk 18446744073709551615\n"
+                    "property double a\nelement vertex 1\n" +
+                        xyz_props + "end_header\n",
+                    "file truncated: element 'junk'");
+  }
+  SUBCASE("truncated binary") {
+    std::string bin =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\n" + xyz_props + "end_header\n";
+    for (int k = 0; k < 8; ++k) put(bin, 1.0f, false);  // 2 2/3 vertices
+    check_ply_error(dir, "short.ply", bin,
+                    "file truncated: header claims 3 vertices but only 32 bytes of data");
+  }
+  SUBCASE("ascii data problems") {
+    check_ply_error(dir, "short_ascii.ply",
+                    "ply\nformat ascii 1.0\nelement vertex 3\n" + xyz_props +
+                        "end_header\n1.000 2.000 3.000\n4.000 5.000 6.000\n",
+                    "truncated ascii data: header claims 3 vertex records but data ends in "
+                    "record 2");
+    check_ply_error(
+        dir, "word.ply",
+        "ply\nformat ascii 1.0\nelement vertex 2\n" + xyz_props + "end_header\n1 2 3\n4.0 abc 6\n",
+        "line 9 (vertex 1): cannot parse 'abc' as a number");
+    check_ply_error(
+        dir, "glued.ply",
+        "ply\nformat ascii 1.0\nelement vertex 1\n" + xyz_props + "end_header\n1 2.5.1 3\n",
+        "cannot parse '2.5.1'");
+    check_ply_error(dir, "negid.ply",
+                    "ply\nformat ascii 1.0\nelement vertex 1\n" + xyz_props +
+                        "property int id\nend_header\n1 2 3 -4\n",
+                    "negative id -4");
+  }
+  SUBCASE("binary list element before vertex is unsupported") {
+    std::string bin =
+        "ply\nformat binary_little_endian 1.0\nelement face 1\n"
+        "property list uchar int vertex_indices\nelement vertex 1\n" +
+        xyz_props + "end_header\n";
+    bin.append(17, '\0');
+    check_ply_error(dir, "facefirst.ply", bin, "unsupported binary PLY: element 'face'");
+  }
+}

@@ -1,0 +1,182 @@
+// ScanInserter's threads and scratch paths give the very same map: same voxels, same log-odds,
+// same storage order, same statistics, for 1, 2, 4 and 8 threads, dense and hashed scratch, bit and
+// byte marks. (The insert_threads.* cases also run under ThreadSanitizer: ctest -R tsan.)
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <list>
+#include <memory>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <knnocc/insertion/scan_inserter.hpp>
+
+#include "test_support.hpp"
+
+using knnocc::OccupancyMap;
+using knnocc::OcKey;
+using knnocc::Point3f;
+using knnocc::WideKey;
+
+namespace {
+
+using knnocc::test::Scan;
+
+// A room-like scene: most points on walls and a floor, some inside, a few far away or invalid.
+std::vector<Scan> random_scans(std::uint64_t seed, int scans, int points) {
+  knnocc::test::Rng rng(seed);
+  std::uniform_real_distribution<float> u(-6.f, 6.f), o(-0.5f, 0.5f), unit(0.f, 1.f);
+  std::vector<Scan> out(static_cast<std::size_t>(scans));
+  for (auto& s : out) {
+    s.origin = {o(rng), o(rng), 1.0f + o(rng)};
+    for (int i = 0; i < points; ++i) {
+      Point3f p{u(rng), u(rng), u(rng) * 0.4f};
+      const float r = unit(rng);
+      if (r < 0.3f)
+        p.z = 0.0f;  // floor
+      else if (r < 0.6f)
+        p.x = p.x < 0 ? -6.f : 6.f;  // walls
+      else if (r < 0.602f)
+        p.x *= 4.0f;  // far
+      else if (r < 0.603f)
+        p.y = std::nanf("");  // invalid
+      s.points.push_back(p);
+    }
+  }
+  return out;
+}
+
+template <class Key>
+struct Outcome {
+  std::vector<std::tuple<std::uint64_t, float>> voxels;  // in storage order
+  std::vector<std::size_t> stats;                        // per scan: keys, occupied, free, ...
+
+  bool operator==(const Outcome& o) const { return voxels == o.voxels && stats == o.stats; }
+};
+
+template <class Key>
+Outcome<Key> insert(const std::vector<Scan>& scans, double res, unsigned threads,
+                    std::size_t scratch_limit, double max_range = -1.0, bool discretize = false) {
+  OccupancyMap<Key> map(res);
+  knnocc::ScanInserter<Key> inserter(map, {}, threads);
+  inserter.set_scratch_limit(scratch_limit);
+  Outcome<Key> out;
+  for (const auto& s : scans) {
+    const auto st = inserter.insert_point_cloud(s.origin, s.points, max_range, discretize);
+    out.stats.insert(out.stats.end(),
+                     {st.points, st.nonfinite, st.out_of_range, st.beyond_max_range, st.ray_keys,
+                      st.occupied_voxels, st.free_voxels});
+  }
+  map.for_each_voxel([&](const Key& k, float v) { out.voxels.emplace_back(k.pack(), v); });
+  return out;
+}
+
+constexpr std::size_t kDefaultLimit = std::size_t{128} << 20;
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("insert_threads.identical_maps", Key, OcKey, WideKey) {
+  // 12,000 points per scan: collect() splits the points between the threads too (from 8,192).
+  const auto scans = random_scans(7, 3, 12000);
+  for (const double max_range : {-1.0, 3.0}) {
+    for (const bool discretize : {false, true}) {
+      CAPTURE(max_range);
+      CAPTURE(discretize);
+      const auto one = insert<Key>(scans, 0.1, 1, kDefaultLimit, max_range, discretize);
+      REQUIRE(one.voxels.size() > 10000);
+      for (const unsigned threads : {2u, 4u, 8u}) {
+        CAPTURE(threads);
+        CHECK(insert<Key>(scans, 0.1, threads, kDefaultLimit, max_range, discretize) == one);
+        // The hashed scratch (what a scan too large for the dense one takes) agrees too.
+        CHECK(insert<Key>(scans, 0.1, threads, 0, max_range, discretize) == one);
+      }
+      CHECK(insert<Key>(scans, 0.1, 1, 0, max_range, discretize) == one);
+    }
+  }
+}
+
+TEST_CASE("insert_threads.scratch_limit_picks_the_path_not_the_map") {
+  // Scans whose box is too large for the dense scratch under a given limit fall back to the
+  // hashed one; in between, some scans of a sequence take one path and some the other.
+  const auto scans = random_scans(11, 6, 3000);
+  const auto reference = insert<OcKey>(scans, 0.05, 1, kDefaultLimit);
+  for (const std::size_t limit :
+       {std::size_t{0}, std::size_t{5} << 20, std::size_t{8} << 20, std::size_t{16} << 20}) {
+    CAPTURE(limit);
+    CHECK(insert<OcKey>(scans, 0.05, 1, limit) == reference);
+    CHECK(insert<OcKey>(scans, 0.05, 3, limit) == reference);
+  }
+}
+
+TEST_CASE("insert_threads.scan_dat") {
+  std::vector<Scan> scans(1);
+  scans[0].points = knnocc::test::scan_dat_points_or_skip();
+  if (scans[0].points.empty()) return;
+  const auto one = insert<OcKey>(scans, 0.1, 1, kDefaultLimit);
+  CHECK(one.stats[4] == 7066778);  // ray keys, as liboctomap's computeRayKeys
+  for (const unsigned threads : {2u, 4u, 8u}) {
+    CAPTURE(threads);
+    CHECK(insert<OcKey>(scans, 0.1, threads, kDefaultLimit) == one);
+  }
+  CHECK(insert<OcKey>(scans, 0.1, 2, 0) == one);
+}
+
+TEST_CASE("insert_threads.byte_marks_build_the_same_map") {
+  // A scan whose rays take more than 4 M steps in a box of under 4 M voxels marks its free
+  // voxels in bytes (ScanStats::byte_marks) where the CPU has AVX-512 (elsewhere bits): the same
+  // map as with bit marks (a scratch limit too small for bytes), the hashed scratch and any thread
+  // count. Points on and near the walls of a 6 m cube around the origin at 0.05 m: a box of about
+  // 130^3 voxels, rays of about 100 steps. The scan goes in chunks (a vector) and in one piece (a
+  // list), and the second scan reuses the bytes.
+  knnocc::test::Rng rng(29);
+  std::uniform_real_distribution<float> u(-3.f, 3.f);
+  std::uniform_int_distribution<int> face(0, 5);
+  std::vector<Scan> scans(2);
+  for (std::size_t s = 0; s < scans.size(); ++s) {
+    scans[s].origin = {0.013f + 0.2f * static_cast<float>(s), -0.021f, 0.034f};
+    for (int i = 0; i < 60000; ++i) {
+      Point3f p{u(rng), u(rng), u(rng)};
+      const int f = face(rng);
+      // Two in three on a wall, exactly on a voxel border (rays without a clear end); the rest
+      // inside, on the wall's plane moved by a random part of a voxel (rays with a clear end).
+      (f < 2 ? p.x : f < 4 ? p.y : p.z) = (f % 2 ? 3.f : -3.f) * (i % 3 ? 1.f : 0.99f);
+      scans[s].points.push_back(p);
+    }
+  }
+  bool avx512 = false;
+#if KNNOCC_AVX2_LANES && !defined(KNNOCC_NO_AVX512)
+  avx512 = knnocc::detail::cpu_has_avx512();
+#endif
+  auto run = [&](unsigned threads, std::size_t limit, bool listed, bool bytes_if_avx512) {
+    const bool expect_bytes = bytes_if_avx512 && avx512;
+    OccupancyMap<OcKey> map(0.05);
+    knnocc::ScanInserter<OcKey> inserter(map, {}, threads);
+    inserter.set_scratch_limit(limit);
+    Outcome<OcKey> out;
+    for (const auto& s : scans) {
+      const auto st = listed ? inserter.insert_point_cloud(
+                                   s.origin, std::list<Point3f>(s.points.begin(), s.points.end()))
+                             : inserter.insert_point_cloud(s.origin, s.points);
+      CHECK(st.byte_marks == expect_bytes);
+      CHECK(st.ray_keys > (std::size_t{4} << 20));
+      out.stats.insert(out.stats.end(), {st.ray_keys, st.occupied_voxels, st.free_voxels});
+    }
+    map.for_each_voxel([&](const OcKey& k, float v) { out.voxels.emplace_back(k.pack(), v); });
+    return out;
+  };
+  const auto bytes = run(1, kDefaultLimit, false, true);
+  REQUIRE(bytes.voxels.size() > 100000);
+  MESSAGE("byte marks: " << (avx512 ? "tested" : "not used on this CPU (no AVX-512)"));
+  // Bits: room for two bitmaps of the box (about 0.6 MB) but not for a byte map (2.2 MB).
+  CHECK(run(1, std::size_t{1} << 20, false, false) == bytes);
+  CHECK(run(1, 0, false, false) == bytes);  // hashed
+  CHECK(run(1, kDefaultLimit, true, true) == bytes);
+  for (const unsigned threads : {2u, 4u}) {
+    CAPTURE(threads);
+    CHECK(run(threads, kDefaultLimit, false, true) == bytes);
+    CHECK(run(threads, kDefaultLimit, true, true) == bytes);
+  }
+}

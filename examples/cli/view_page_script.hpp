@@ -131,7 +131,7 @@ function reset() {
   const m = D.maps[current];
   view.target.set(m.centre[0], m.centre[1], m.centre[2]);
   const r = Math.sqrt(m.half[0] * m.half[0] + m.half[1] * m.half[1] + m.half[2] * m.half[2]);
-  view.dist = r / Math.sin(camera.fov * Math.PI / 360) * 0.9;
+  view.dist = r / Math.sin(camera.fov * Math.PI / 360);
   view.az = 0.6; view.el = 0.65;
 }
 function place() {

@@ -131,7 +131,7 @@ function reset() {
   const m = D.maps[current];
   view.target.set(m.centre[0], m.centre[1], m.centre[2]);
   const r = Math.sqrt(m.half[0] * m.half[0] + m.half[1] * m.half[1] + m.half[2] * m.half[2]);
-  view.dist = r / Math.sin(camera.fov * Math.PI / 360);
+  view.dist = r / Math.sin(camera.fov * Math.PI / 360) * 1.15;
   view.az = 0.6; view.el = 0.65;
 }
 function place() {
@@ -209,8 +209,13 @@ for (let v = Math.ceil(D.heightLo / st) * st; v <= D.heightHi + 1e-9; v += st) {
   d.textContent = '- ' + (Math.abs(v) < 1e-9 ? 0 : v).toFixed(st < 1 ? (st < 0.1 ? 2 : 1) : 0);
   ticks.appendChild(d);
 }
+// page.html#N shows map N first (0-based); page.html#N,free with the free voxels.
+const hash = location.hash.slice(1).split(',');
+const first = Math.min(D.maps.length - 1, Math.max(0, parseInt(hash[0], 10) || 0));
+freeBox.checked = hash.indexOf('free') >= 0;
+current = first;
 reset();
-show(0);
+show(first);
 // First frame now, synchronously, and report when the GPU has finished it.
 place();
 renderer.render(scene, camera);

@@ -14,7 +14,6 @@
 #include <knnocc/io/png.hpp>
 #include <knnocc/io/voxel_export.hpp>
 
-#include "../examples/cli/map_picture.hpp"
 #include "test_support.hpp"
 
 namespace io = knnocc::io;
@@ -173,43 +172,4 @@ TEST_CASE("voxel_export.points and cubes read back") {
       CHECK(mesh.find("\n4 8 10 11 9\n") != std::string::npos);  // the second cube's -z face
     }
   }
-}
-
-TEST_CASE("map_picture.top and side views") {
-  OccupancyMap<OcKey> map(0.1);
-  // A 10 x 4 x 3 block of free voxels with one occupied voxel on top at x = 2, y = 1.
-  for (std::uint16_t x = 0; x < 10; ++x)
-    for (std::uint16_t y = 0; y < 4; ++y)
-      for (std::uint16_t z = 0; z < 3; ++z)
-        map.set(OcKey(static_cast<std::uint16_t>(32768 + x), static_cast<std::uint16_t>(32768 + y),
-                      static_cast<std::uint16_t>(32768 + z)),
-                -1.0f);
-  map.set(OcKey(32770, 32769, 32770), 2.0f);
-  const knnocc::cli::Picture pic = knnocc::cli::render_map_picture(map);
-  REQUIRE(pic.width > 0);
-  const std::int64_t zoom = pic.width / (10 + 16);  // 10 voxel columns + two 8-pixel margins
-  CHECK(zoom == 8);
-  CHECK(pic.height == static_cast<std::uint32_t>((4 + 3 + 24) * zoom));
-  auto at = [&](std::int64_t px, std::int64_t py) {  // pixel in voxel units (zoomed)
-    const std::size_t i =
-        static_cast<std::size_t>(((py * zoom + zoom / 2) * pic.width + px * zoom + zoom / 2) * 3);
-    return std::array<int, 3>{pic.rgb[i], pic.rgb[i + 1], pic.rgb[i + 2]};
-  };
-  // Top view: rows from y = 3 (top) down to y = 0; the occupied voxel is the highest (z = 2),
-  // i.e. the top of the colour ramp.
-  const auto top_colour = io::detail::height_colour(1.0);
-  CHECK(at(8 + 2, 8 + 2) == std::array<int, 3>{top_colour[0], top_colour[1], top_colour[2]});
-  CHECK(at(8 + 5, 8 + 2) == std::array<int, 3>{225, 228, 232});  // known free
-  CHECK(at(2, 2) == std::array<int, 3>{255, 255, 255});          // margin
-  // Side view: starts after the top view and a margin; row 0 is z = 2.
-  const auto side = at(8 + 2, 8 + 4 + 8);
-  CHECK(side != std::array<int, 3>{225, 228, 232});
-  CHECK(at(8 + 7, 8 + 4 + 8 + 2) == std::array<int, 3>{225, 228, 232});
-
-  const std::string path = export_file("map.png");
-  knnocc::cli::write_map_png(path, map);
-  const Decoded d = decode_png(read_file(path));
-  CHECK(d.rgb == pic.rgb);
-  CHECK_THROWS_WITH_AS(knnocc::cli::write_map_png(path, OccupancyMap<OcKey>(0.1)),
-                       doctest::Contains("empty"), io::Error);
 }

@@ -1,7 +1,9 @@
 #pragma once
-// A small command-line parser for the knnocc tool: --name value pairs, --flags and (for commands
-// that take them) positional arguments, with one-line errors (UsageError) for unknown options,
-// missing values and malformed numbers.
+// The command-line parser of the knnocc tool: `--name value` and `--name=value`, --flags, short
+// forms of common options (-i --input, -o --out, -r --res, -k --k, -j --threads, -m --model, each
+// where the command has the long option) and (for commands that take them) positional
+// arguments, with one-line errors naming the option (UsageError): unknown options, missing
+// values, an option given where a value belongs (`--out-voxels --threads 2`), malformed numbers.
 
 #include <cerrno>
 #include <cmath>
@@ -10,6 +12,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace knnocc::cli {
@@ -25,18 +28,41 @@ class Args {
   /// other arguments are kept in order (positional()).
   Args(const std::vector<std::string>& argv, const std::set<std::string>& valued,
        const std::set<std::string>& flags, std::size_t max_positional = 0) {
+    static const std::pair<const char*, const char*> kShort[] = {
+        {"-i", "--input"}, {"-o", "--out"},     {"-r", "--res"},
+        {"-k", "--k"},     {"-j", "--threads"}, {"-m", "--model"}};
+    auto known = [&](const std::string& o) { return valued.count(o) || flags.count(o); };
     for (std::size_t i = 0; i < argv.size(); ++i) {
-      const std::string& a = argv[i];
+      std::string a = argv[i];
       if (a == "-h" || a == "--help") {
         help_ = true;
         continue;
       }
+      for (const auto& [s, l] : kShort)
+        if (a == s && valued.count(l)) a = l;
+      std::string inline_value;
+      bool has_inline = false;
+      const std::size_t eq = a.find('=');
+      if (a.rfind("--", 0) == 0 && eq != std::string::npos) {
+        inline_value = a.substr(eq + 1);
+        a = a.substr(0, eq);
+        has_inline = true;
+      }
       if (flags.count(a)) {
+        if (has_inline) throw UsageError(a + " takes no value");
         flags_.insert(a);
       } else if (valued.count(a)) {
-        if (i + 1 >= argv.size()) throw UsageError(a + " needs a value");
         if (values_.count(a)) throw UsageError(a + " given twice");
-        values_[a] = argv[++i];
+        if (has_inline) {
+          values_[a] = inline_value;
+          continue;
+        }
+        if (i + 1 >= argv.size()) throw UsageError(a + " needs a value");
+        const std::string& v = argv[i + 1];
+        if (v.rfind("--", 0) == 0 && known(v.substr(0, v.find('='))))
+          throw UsageError(a + " needs a value, got the option " + v);
+        values_[a] = v;
+        ++i;
       } else if (a.rfind("--", 0) == 0) {
         throw UsageError("unknown option " + a + " (see --help)");
       } else if (positional_.size() < max_positional) {

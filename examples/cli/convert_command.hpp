@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
@@ -48,7 +49,9 @@ options:
   --ply-cubes           .ply from a map: one cube per voxel instead of one point
   --ply-free            .ply from a map: free voxels too (same as --voxels all)
   --encoding E          ascii or binary (default) for .ply and .pcd; binary_compressed for .pcd
-Prints one summary line: `map N voxels (occupied N, free N)` or `cloud N points`.
+  --up AXIS             .png: which way is up (x, y, z, -x, -y, -z; default z)
+Prints what was read (`map N voxels (occupied N, free N)` or `cloud N points`), then what was
+written: `wrote OUT: N occupied voxels as points` and the like.
 exit status: 0 success, 2 bad input (one line on stderr naming the file and the problem).
 )";
 }
@@ -84,7 +87,7 @@ inline OccupancyMap<OcKey> read_voxel_list_map(const std::string& path, double r
 }  // namespace detail
 
 inline int run_convert(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--res", "--voxels", "--encoding"},
+  const Args args(argv, {"--res", "--voxels", "--encoding", "--up"},
                   {"--voxel-list", "--ply-cubes", "--ply-free"}, 2);
   if (args.help()) {
     std::fputs(convert_help(), stdout);
@@ -137,7 +140,8 @@ inline int run_convert(const std::vector<std::string>& argv) {
     } else if (out_ext == ".ot") {
       io::write_ot(out, map);
     } else if (out_ext == ".png") {
-      write_map_png(out, map);
+      write_map_png(out, map, args.has("--up") ? parse_up_axis(args.str("--up")) : UpAxis{},
+                    std::filesystem::path(in).filename().string());
     } else if (out_ext == ".voxels" || out_ext == ".txt") {
       io::write_voxel_list(out, io::voxel_records(map, sel("all")));
     } else if (out_ext == ".ply") {
@@ -174,6 +178,30 @@ inline int run_convert(const std::vector<std::string>& argv) {
     }
     const auto c = map.count_voxels();
     std::printf("map %zu voxels (occupied %zu, free %zu)\n", c.known(), c.occupied, c.free);
+    // What OUT holds, in the words of the selection that made it.
+    auto chosen = [&](io::VoxelSelection s) {
+      return s == io::VoxelSelection::all    ? c.known()
+             : s == io::VoxelSelection::free ? c.free
+                                             : c.occupied;
+    };
+    auto sel_name = [](io::VoxelSelection s) {
+      return s == io::VoxelSelection::all    ? "known (occupied and free)"
+             : s == io::VoxelSelection::free ? "free"
+                                             : "occupied";
+    };
+    if (out_ext == ".bt" || out_ext == ".ot")
+      std::printf("wrote %s: the whole map as an OctoMap tree\n", out.c_str());
+    else if (out_ext == ".png")
+      std::printf("wrote %s: a picture of the map\n", out.c_str());
+    else if (out_ext == ".voxels" || out_ext == ".txt")
+      std::printf("wrote %s: %zu %s voxels\n", out.c_str(), chosen(sel("all")),
+                  sel_name(sel("all")));
+    else if (out_ext == ".ply")
+      std::printf("wrote %s: %zu %s voxels as %s\n", out.c_str(), chosen(sel("occupied")),
+                  sel_name(sel("occupied")), args.flag("--ply-cubes") ? "cubes" : "points");
+    else
+      std::printf("wrote %s: %zu %s voxel centres as points\n", out.c_str(),
+                  chosen(sel("occupied")), sel_name(sel("occupied")));
     return 0;
   }
 
@@ -192,6 +220,7 @@ inline int run_convert(const std::vector<std::string>& argv) {
       cloud.points.insert(cloud.points.end(), world.begin(), world.end());
       progress.update(i + 1);
     }
+    progress.finish();
   }
   const std::vector<std::uint64_t>* ids = cloud.ids.empty() ? nullptr : &cloud.ids;
   if (out_ext == ".ply") {
@@ -206,7 +235,8 @@ inline int run_convert(const std::vector<std::string>& argv) {
   } else {
     io::write_xyz(out, cloud.points);
   }
-  std::printf("cloud %zu points\n", cloud.points.size());
+  std::printf("cloud %zu points\nwrote %s: %zu points\n", cloud.points.size(), out.c_str(),
+              cloud.points.size());
   return 0;
 }
 

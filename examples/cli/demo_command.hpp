@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <knnocc/eval/metrics.hpp>
@@ -25,6 +26,7 @@
 #include "map_command.hpp"
 #include "map_picture.hpp"
 #include "room_demo.hpp"
+#include "view_page.hpp"
 
 namespace knnocc::cli {
 
@@ -43,7 +45,9 @@ and the k-NN model's figures relative to the OctoMap model's.
                    (DIR/scene/reference.txt) and both maps (<model> = octomap, knn) as OctoMap
                    binary trees for octovis (DIR/<model>.bt), voxel lists (DIR/<model>.voxels),
                    occupied voxels as PLY cubes coloured by height (DIR/<model>_occupied.ply)
-                   and top/side pictures (DIR/<model>.png)
+                   and top/side pictures (DIR/<model>.png); DIR/demo.png, one picture of
+                   OctoMap model | k-NN model | reference (same extent and colours), and
+                   DIR/demo.html, the three in 3D (knnocc view)
 )";
 }
 
@@ -54,9 +58,40 @@ struct Row {
   double median_ms = 0;
 };
 
+/// The reference as a map: its shell voxels (as eval counts them) and the ground under the
+/// scene, occupied.
+inline OccupancyMap<OcKey> reference_map(const eval::Reference& ref, double res) {
+  OccupancyMap<OcKey> map(res);
+  const auto& g = map.grid();
+  Point3d lo, hi;
+  ref.bounds(1.0, lo, hi);
+  OcKey a, b;
+  if (!(lo.x <= hi.x) || !g.coord_to_key(lo.x, lo.y, lo.z, a) ||
+      !g.coord_to_key(hi.x, hi.y, hi.z, b))
+    return map;
+  OcKey ground;
+  const bool has_ground =
+      ref.has_ground && g.coord_to_key(0.0, 0.0, ref.ground_z - res / 2, ground);
+  const float occ = map.params().clamp_max;
+  for (int x = a[0]; x <= b[0]; ++x)
+    for (int y = a[1]; y <= b[1]; ++y) {
+      for (int z = a[2]; z <= b[2]; ++z) {
+        const OcKey k(static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y),
+                      static_cast<std::uint16_t>(z));
+        const Point3d c{g.index_to_coord(k[0]), g.index_to_coord(k[1]), g.index_to_coord(k[2])};
+        if (eval::on_shell(ref, eval::voxel_relation(ref, c, res), c)) map.set(k, occ);
+      }
+      if (has_ground)
+        map.set(OcKey(static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y), ground[2]),
+                occ);
+    }
+  return map;
+}
+
 template <class Model>
 Row run_model(const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& ref, double res,
-              double crop, const Model& model, const std::string& out_dir, const char* name) {
+              double crop, const Model& model, const std::string& out_dir, const char* name,
+              OccupancyMap<OcKey>* keep = nullptr) {
   Mapper<Model> mapper(res, model);
   std::vector<double> us = sim::map_keyframes(mapper, kfs, crop);
   std::sort(us.begin(), us.end());
@@ -69,8 +104,9 @@ Row run_model(const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& r
     io::VoxelExportOptions cubes;
     cubes.shape = io::VoxelShape::cubes;
     io::write_voxels_ply(base + "_occupied.ply", map, cubes);
-    write_map_png(base + ".png", map);
+    write_map_png(base + ".png", map, UpAxis{}, model_title(model));
   }
+  if (keep) *keep = std::move(mapper.map());
   return row;
 }
 
@@ -147,9 +183,22 @@ inline int run_demo(const std::vector<std::string>& argv) {
       eval::write_reference((std::filesystem::path(seq) / "reference.txt").string(),
                             scene.reference());
     }
-    const demo::Row o =
-        demo::run_model(kfs, scene.reference(), res, crop, OctoMapModel{}, dir, "octomap");
-    const demo::Row k = demo::run_model(kfs, scene.reference(), res, crop, knn, dir, "knn");
+    OccupancyMap<OcKey> octo_map(res), knn_map(res);
+    const demo::Row o = demo::run_model(kfs, scene.reference(), res, crop, OctoMapModel{}, dir,
+                                        "octomap", &octo_map);
+    const demo::Row k =
+        demo::run_model(kfs, scene.reference(), res, crop, knn, dir, "knn", &knn_map);
+    if (!dir.empty()) {
+      const OccupancyMap<OcKey> ref_map = demo::reference_map(scene.reference(), res);
+      write_comparison_png(
+          (std::filesystem::path(dir) / "demo.png").string(),
+          {{"OctoMap model", &octo_map}, {"k-NN model", &knn_map}, {"reference shapes", &ref_map}},
+          UpAxis{});
+      write_view_page(
+          (std::filesystem::path(dir) / "demo.html").string(),
+          {{"OctoMap model", &octo_map}, {"k-NN model", &knn_map}, {"reference shapes", &ref_map}},
+          UpAxis{}, ViewOptions{});
+    }
     for (const auto& [name, r] : {std::pair<const char*, const demo::Row&>{"octomap", o},
                                   std::pair<const char*, const demo::Row&>{"knn", k}})
       std::printf("%-5ld %-8s %8zu %8zu %6zu %8zu %8zu %10zu %11zu %8.3f\n", s, name, r.m.occupied,
@@ -201,8 +250,10 @@ inline int run_demo(const std::vector<std::string>& argv) {
       "%zu keyframe points, %zu of them wrong stereo matches; %.2f s in all\n",
       irr_pct, irr_goal, shell_pct, shell_goal, points, outliers, seconds);
   if (!out.empty())
-    std::printf("wrote %s/{octomap,knn}{.bt,.voxels,_occupied.ply,.png} and %s/scene/\n",
-                out.c_str(), out.c_str());
+    std::printf(
+        "wrote %s/demo.png, %s/demo.html, %s/{octomap,knn}{.bt,.voxels,_occupied.ply,.png} and "
+        "%s/scene/\n",
+        out.c_str(), out.c_str(), out.c_str(), out.c_str());
   return 0;
 }
 

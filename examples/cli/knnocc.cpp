@@ -19,6 +19,7 @@
 #include "map_command.hpp"
 #include "sim_command.hpp"
 #include "track_command.hpp"
+#include "view_command.hpp"
 
 namespace {
 
@@ -34,6 +35,7 @@ commands:
   eval     compare a map with reference shapes (the paper's Table 1 metrics)
   info     what a map (.bt/.ot), cloud, scan graph or sequence folder holds
   convert  maps and clouds between formats (.bt .ot .ply .pcd .xyz .bin .png, voxel lists)
+  view     maps in 3D: one self-contained web page (three.js embedded)
   version  print the version
 )";
 
@@ -54,6 +56,7 @@ int main(int argc, char** argv) {
     if (command == "eval") return knnocc::cli::run_eval(args);
     if (command == "info") return knnocc::cli::run_info(args);
     if (command == "convert") return knnocc::cli::run_convert(args);
+    if (command == "view") return knnocc::cli::run_view(args);
     if (command == "version" || command == "--version") {
       std::printf("knnocc %s\n", KNNOCC_VERSION_STRING);
       return 0;

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -17,17 +18,19 @@
 #include "args.hpp"
 #include "map_outputs.hpp"
 #include "progress.hpp"
+#include "view_frame.hpp"
 
 namespace knnocc::cli {
 
 inline std::string map_help() {
-  return std::string(R"(usage: knnocc map --input PATH --res R [options]
+  return std::string(R"(usage: knnocc map --input PATH --res R [options]     (--opt=value works too)
 
 Builds an occupancy map and prints one summary line:
   clouds N points N occupied N free N seconds S
-(occupied/free: finest-level voxels in the map; points: points inserted, after --crop).
+(occupied/free: finest-level voxels in the map; points: points inserted, after --crop), then
+`wrote FILE ...` listing every file written.
 
-input (--input PATH):
+input (-i, --input PATH):
   a sequence folder     poses.txt (sensor to world; TUM "stamp tx ty tz qx qy qz qw" or KITTI
                         3x4 "r11 r12 r13 tx r21 ... tz" lines) and clouds/NNNNNN.{ply,pcd,bin,xyz}
                         (points in the sensor frame, cloud i <-> pose line i); a KITTI
@@ -36,8 +39,8 @@ input (--input PATH):
   a point file          .ply, .pcd (VIEWPOINT = sensor pose), KITTI .bin, or ASCII
                         .xyz/.dat/.txt (x y z per line); sensor at the origin
 options:
-  --res R               voxel edge in metres (required, > 0)
-  --model octomap|knn   inverse sensor model (default octomap: hit 0.7, miss 0.4,
+  -r, --res R           voxel edge in metres (required, > 0)
+  -m, --model octomap|knn   inverse sensor model (default octomap: hit 0.7, miss 0.4,
                         clamping 0.1192..0.971, OctoMap's insertPointCloud semantics;
                         knn: the paper's k-NN model, eq 13-15, see below)
   --max-range M         points farther than M from the sensor only free space up to M and
@@ -48,8 +51,17 @@ options:
   --out-voxels FILE     write `x y z logodds` per finest voxel (centre, world frame, %.6f),
                         sorted by x, y, z; written to a temporary file, then renamed
   --voxels WHICH        which voxels --out-voxels writes: occupied, free or all (default)
+  --first I             start at cloud I (0-based; default 0) ...
+  --count N             ... and map N clouds (default: all the rest)
+  --init-map F.ot|F.bt  continue this map (OctoMap model only): a .ot holds the log-odds, so
+                        mapping clouds 0..n-1 to a .ot and then --init-map it --first n gives the
+                        same map as one run; a .bt holds only occupied/free (clamped values).
+                        --res defaults to the map's. A k-NN map cannot be continued from a file:
+                        the tracker's map points and s_p statistics are not in it.
+  --save-every N        every N clouds, write the --out-bt / --out-ot files (atomically: a
+                        killed run leaves the last whole snapshot)
 )") + map_outputs_help() +
-         R"(  --threads N           threads that walk the rays of each cloud (default 1); the map is the
+         R"(  -j, --threads N       threads that walk the rays of each cloud (default 1); the map is the
                         same for every N
 k-NN model (--model knn): the map point cloud is the union of the keyframes (clouds with an `id`
 property: ORB-SLAM map points, each joins once; without ids every point is a new map point);
@@ -70,11 +82,23 @@ exit status: 0 success, 2 bad input (one line on stderr naming the file and the 
 }
 
 struct MapOptions {
-  std::string input, which, out_voxels;
+  std::string input, which, out_voxels, init_map;
   double res = 0, max_range = -1, crop = -1;
   bool discretize = false;
   unsigned threads = 1;
+  std::size_t first = 0, count = static_cast<std::size_t>(-1), save_every = 0;
 };
+
+inline const char* model_title(const OctoMapModel&) { return "OctoMap model"; }
+inline const char* model_title(const KnnModel&) { return "k-NN model"; }
+
+/// Prints `wrote A, B, ...` (nothing when no file was written).
+inline void print_written(const std::vector<std::string>& written) {
+  if (written.empty()) return;
+  std::string line = "wrote";
+  for (std::size_t i = 0; i < written.size(); ++i) line += (i ? ", " : " ") + written[i];
+  std::printf("%s\n", line.c_str());
+}
 
 /// The k-NN model's flags (defaults: the documented sweep's choice); UsageError when invalid.
 inline KnnModelParams knn_params(const Args& args) {
@@ -98,8 +122,25 @@ inline KnnModelParams knn_params(const Args& args) {
 template <class Model>
 int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   const auto t0 = std::chrono::steady_clock::now();
-  Mapper<Model> mapper(opt.res, model,
-                       MapperOptions{opt.max_range, opt.discretize, opt.threads, {}});
+  const MapperOptions mo{opt.max_range, opt.discretize, opt.threads, {}};
+  std::unique_ptr<Mapper<Model>> owned;
+  if (!opt.init_map.empty()) {
+    OccupancyMap<OcKey> init = io::read_octree(opt.init_map);
+    if (opt.res > 0 && std::abs(init.grid().resolution() - opt.res) > 1e-12 * opt.res)
+      throw io::Error(opt.init_map, "resolution " + std::to_string(init.grid().resolution()) +
+                                        " differs from --res " + std::to_string(opt.res));
+    if (lower_extension(opt.init_map) == ".bt")
+      std::fprintf(stderr,
+                   "knnocc map: %s: a .bt holds only occupied/free; continuing from clamped "
+                   "log-odds (a .ot continues exactly)\n",
+                   opt.init_map.c_str());
+    owned = std::make_unique<Mapper<Model>>(std::move(init), model, mo);
+  } else {
+    owned = std::make_unique<Mapper<Model>>(opt.res, model, mo);
+  }
+  Mapper<Model>& mapper = *owned;
+  UpEstimator up_estimate;
+  std::vector<std::string> written;
   ScanStats total;
   std::size_t clouds = 0, rays = 0, rated = 0;
   std::vector<double> keyframe_ms;
@@ -114,12 +155,17 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
 
   // --crop: distance to the sensor, measured while the points are still in the sensor frame.
   const io::ScanSource source = io::ScanSource::open(opt.input);
-  Progress progress("map", source.size());
+  if (opt.first > source.size() || (opt.first == source.size() && source.size() > 0))
+    throw UsageError("--first " + std::to_string(opt.first) + ": " + opt.input + " has " +
+                     std::to_string(source.size()) + " clouds");
+  const std::size_t last = opt.first + std::min(opt.count, source.size() - opt.first);
+  Progress progress("map", last - opt.first);
   std::vector<Point3f> world_f;  // OctoMap model: float points, as liboctomap
   std::vector<Point3d> world;    // k-NN model: double, as the tracker keeps them
   std::vector<std::uint64_t> ids;
-  for (std::size_t i = 0; i < source.size(); ++i) {
+  for (std::size_t i = opt.first; i < last; ++i) {
     io::Scan scan = source.load(i);
+    up_estimate.add(scan.pose, scan.cloud.points);
     const auto a = std::chrono::steady_clock::now();
     if constexpr (Mapper<Model>::uses_map_cloud) {
       io::keyframe_to_world(scan.pose, scan.cloud, opt.crop, world, ids);
@@ -145,8 +191,13 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
     }
     keyframe_ms.push_back(
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
-    progress.update(i + 1);
+    progress.update(i + 1 - opt.first);
+    if (opt.save_every && (i + 1 - opt.first) % opt.save_every == 0 && i + 1 < last) {
+      if (args.has("--out-bt")) io::write_bt(args.str("--out-bt"), mapper.map());
+      if (args.has("--out-ot")) io::write_ot(args.str("--out-ot"), mapper.map());
+    }
   }
+  progress.finish();
   const auto& map = mapper.map();
 
   if (total.nonfinite)
@@ -163,8 +214,9 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
                                      : opt.which == "occupied" ? io::VoxelSelection::occupied
                                                                : io::VoxelSelection::free;
     io::write_voxel_list(opt.out_voxels, io::voxel_records(map, which));
+    written.push_back(opt.out_voxels);
   }
-  write_map_outputs(map, args);
+  write_map_outputs(map, args, up_axis(args, up_estimate.result()), model_title(model), written);
 
   if constexpr (Mapper<Model>::uses_map_cloud) {
     const auto& tr = mapper.tracker();
@@ -180,23 +232,26 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("clouds %zu points %zu occupied %zu free %zu seconds %.3f\n", clouds, total.points,
               counts.occupied, counts.free, seconds);
+  print_written(written);
   return 0;
 }
 
 inline int run_map(const std::vector<std::string>& argv) {
-  const Args args(argv,
-                  with_map_outputs({"--input", "--res", "--model", "--max-range", "--crop",
-                                    "--out-voxels", "--voxels", "--threads", "--k", "--w",
-                                    "--p-upper", "--p-w", "--p-free", "--s-limit"}),
-                  with_map_output_flags({"--discretize"}));
+  const Args args(
+      argv,
+      with_map_outputs({"--input", "--res", "--model", "--max-range", "--crop", "--out-voxels",
+                        "--voxels", "--threads", "--k", "--w", "--p-upper", "--p-w", "--p-free",
+                        "--s-limit", "--init-map", "--save-every", "--first", "--count"}),
+      with_map_output_flags({"--discretize"}));
   if (args.help()) {
     std::fputs(map_help().c_str(), stdout);
     return 0;
   }
   check_map_outputs(args);
   const std::string input = args.required("--input");
-  if (!args.has("--res")) throw UsageError("--res is required (see --help)");
-  const double res = args.number("--res", 0.0);
+  if (!args.has("--res") && !args.has("--init-map"))
+    throw UsageError("--res is required (see --help)");
+  const double res = args.number("--res", 1.0);
   if (!(res > 0.0)) throw UsageError("--res must be > 0, got " + args.str("--res"));
   // 16-bit keys span ±32768 voxels: below 0.1 mm even a room would not fit, so refuse instead
   // of skipping nearly every point.
@@ -206,7 +261,6 @@ inline int run_map(const std::vector<std::string>& argv) {
     throw UsageError("--model must be octomap or knn, got '" + model + "'");
   MapOptions opt;
   opt.input = input;
-  opt.res = res;
   opt.max_range = args.number("--max-range", -1.0);
   if (opt.max_range == 0.0) throw UsageError("--max-range must be > 0, or < 0 for no limit");
   opt.crop = args.number("--crop", -1.0);
@@ -221,6 +275,29 @@ inline int run_map(const std::vector<std::string>& argv) {
                      "'");
   opt.threads = static_cast<unsigned>(threads);
   opt.out_voxels = args.str("--out-voxels");
+  opt.res = args.has("--res") ? res : 0.0;
+  opt.init_map = args.str("--init-map");
+  if (!opt.init_map.empty()) {
+    const std::string e = lower_extension(opt.init_map);
+    if (e != ".ot" && e != ".bt")
+      throw UsageError("--init-map needs an OctoMap .ot or .bt file, got '" + opt.init_map + "'");
+    if (model != "octomap")
+      throw UsageError(
+          "--init-map needs --model octomap: a k-NN map cannot be continued from a "
+          "file, the tracker's map points and s_p statistics are not in it");
+  }
+  const long first = args.integer("--first", 0), count = args.integer("--count", -1);
+  if (first < 0) throw UsageError("--first must be >= 0, got " + args.str("--first"));
+  if (args.has("--count") && count < 1)
+    throw UsageError("--count must be >= 1, got " + args.str("--count"));
+  opt.first = static_cast<std::size_t>(first);
+  if (count > 0) opt.count = static_cast<std::size_t>(count);
+  const long every = args.integer("--save-every", 0);
+  if (args.has("--save-every") && every < 1)
+    throw UsageError("--save-every must be >= 1, got " + args.str("--save-every"));
+  if (every > 0 && !args.has("--out-bt") && !args.has("--out-ot"))
+    throw UsageError("--save-every needs --out-bt or --out-ot (the files it writes)");
+  opt.save_every = static_cast<std::size_t>(every);
 
   if (model == "octomap") {
     for (const char* knn_only : {"--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"})

@@ -1,11 +1,13 @@
 #pragma once
 // The map files `knnocc map` (and `knnocc convert`) can write besides --out-voxels:
-// OctoMap trees for octovis/octomap_server, PLY voxels for CloudCompare/MeshLab, a PNG picture.
+// OctoMap trees for octovis/octomap_server, PLY voxels for CloudCompare/MeshLab, a PNG picture,
+// a 3D web page.
 
 #include <cctype>
 #include <filesystem>
 #include <set>
 #include <string>
+#include <vector>
 
 #include <knnocc/io/octomap_tree.hpp>
 #include <knnocc/io/voxel_export.hpp>
@@ -13,12 +15,13 @@
 
 #include "args.hpp"
 #include "map_picture.hpp"
+#include "view_page.hpp"
 
 namespace knnocc::cli {
 
 /// Options of write_map_outputs(), for Args: valued options and flags.
 inline std::set<std::string> map_output_options() {
-  return {"--out-bt", "--out-ot", "--out-ply", "--out-png"};
+  return {"--out-bt", "--out-ot", "--out-ply", "--out-png", "--out-html", "--up"};
 }
 inline std::set<std::string> map_output_flags() { return {"--ply-cubes", "--ply-free"}; }
 
@@ -39,7 +42,11 @@ inline const char* map_outputs_help() {
                         property logodds) for CloudCompare / MeshLab
   --ply-cubes           --out-ply writes one cube (8 vertices, 6 faces) per voxel instead
   --ply-free            --out-ply includes free voxels (light grey)
-  --out-png FILE        a picture: top view (colour = height) above a side view
+  --out-png FILE        a picture: top view (colour = height) above a side view, with legend,
+                        scale bar and title (zlib-compressed PNG)
+  --out-html FILE       the map in 3D in one self-contained web page (see knnocc view --help)
+  --up AXIS             which way is up in pictures and pages: x, y, z, -x, -y or -z
+                        (default: from the sensor poses, camera -y / LiDAR +z; z for map files)
 )";
 }
 
@@ -57,21 +64,44 @@ inline void check_map_outputs(const Args& args) {
   if (args.has("--out-ot") && lower_extension(args.str("--out-ot")) != ".ot")
     throw UsageError("--out-ot needs a file name ending in .ot, got '" + args.str("--out-ot") +
                      "'");
+  if (args.has("--up")) parse_up_axis(args.str("--up"));
   if ((args.flag("--ply-cubes") || args.flag("--ply-free")) && !args.has("--out-ply"))
     throw UsageError("--ply-cubes and --ply-free need --out-ply");
 }
 
-/// Writes every requested output (each atomically; io::Error names the file on failure).
-inline void write_map_outputs(const OccupancyMap<OcKey>& map, const Args& args) {
-  if (args.has("--out-bt")) io::write_bt(args.str("--out-bt"), map);
-  if (args.has("--out-ot")) io::write_ot(args.str("--out-ot"), map);
+/// --up if given, else `estimated`.
+inline UpAxis up_axis(const Args& args, UpAxis estimated = {}) {
+  return args.has("--up") ? parse_up_axis(args.str("--up")) : estimated;
+}
+
+/// Writes every requested output (each atomically; io::Error names the file on failure) and
+/// adds its name to `written`. `title` names the map in pictures and pages.
+inline void write_map_outputs(const OccupancyMap<OcKey>& map, const Args& args, UpAxis up,
+                              const std::string& title, std::vector<std::string>& written) {
+  auto done = [&](const char* flag) { written.push_back(args.str(flag)); };
+  if (args.has("--out-bt")) {
+    io::write_bt(args.str("--out-bt"), map);
+    done("--out-bt");
+  }
+  if (args.has("--out-ot")) {
+    io::write_ot(args.str("--out-ot"), map);
+    done("--out-ot");
+  }
   if (args.has("--out-ply")) {
     io::VoxelExportOptions o;
     o.shape = args.flag("--ply-cubes") ? io::VoxelShape::cubes : io::VoxelShape::points;
     o.which = args.flag("--ply-free") ? io::VoxelSelection::all : io::VoxelSelection::occupied;
     io::write_voxels_ply(args.str("--out-ply"), map, o);
+    done("--out-ply");
   }
-  if (args.has("--out-png")) write_map_png(args.str("--out-png"), map);
+  if (args.has("--out-png")) {
+    write_map_png(args.str("--out-png"), map, up, title);
+    done("--out-png");
+  }
+  if (args.has("--out-html")) {
+    write_view_page(args.str("--out-html"), {ViewMap{title, &map}}, up, ViewOptions{});
+    done("--out-html");
+  }
 }
 
 }  // namespace knnocc::cli

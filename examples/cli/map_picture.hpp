@@ -1,145 +1,346 @@
 #pragma once
-// A picture of a map for --out-png: the top view (x right, y up, each column coloured by the
-// height of its highest occupied voxel, known-free columns light grey) above the side view
-// (x right, z up, coloured by height and darker with distance from the viewer at -y).
+// Pictures of maps (--out-png, convert .png, the demo's side-by-side image): a top view (each
+// column coloured by the height of its highest occupied voxel, known-free columns light grey)
+// above a side view (coloured by height, darker with depth), "up" from view_frame.hpp. The drawn
+// extent is the data's robust extent (0.5 % and 99.5 % percentiles of the occupied voxels per
+// axis, padded): far outliers do not shrink the map to a dot. The colour scale spans the 2 %..98 %
+// height percentiles. A ceiling (a dense layer in the upper part covering >= 25 % of the
+// footprint) is cut from the top view so the rooms below show. Each panel has a title line,
+// a scale bar and notes on what was left out; a legend gives the colours in metres.
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <knnocc/io/detail/colormap.hpp>
 #include <knnocc/io/error.hpp>
-#include <knnocc/io/png.hpp>
 #include <knnocc/map/occupancy_map.hpp>
+
+#include "bitmap_font.hpp"
+#include "view_frame.hpp"
+#include "zlib_png.hpp"
 
 namespace knnocc::cli {
 
-struct Picture {
-  std::uint32_t width = 0, height = 0;
-  std::vector<std::uint8_t> rgb;
-  std::int64_t voxels_per_pixel = 1;
+using Rgb = std::array<std::uint8_t, 3>;
+inline constexpr Rgb kFreeColour{222, 226, 232}, kFrameColour{150, 150, 150},
+    kTextColour{30, 30, 30}, kNoteColour{110, 110, 110};
+
+/// The drawn region and colour scale, shared by the panels of one picture.
+struct PictureFrame {
+  ViewFrame view;
+  double res = 0.1;
+  std::array<std::int64_t, 3> lo{}, hi{};  // display coordinates (right, forward, up) in voxels
+  std::int64_t cut = std::numeric_limits<std::int64_t>::max();  // top view shows up < cut
+  bool ceiling_cut = false;
+  std::int64_t colour_lo = 0, colour_hi = 1;  // heights (display up, voxels) of the colour ends
+  std::int64_t step = 1;                      // voxels per pixel before zooming
+  std::int64_t zoom = 1;                      // pixels per pixel after
+  bool empty = true;
+
+  /// Metres of the centre of display index d along display axis i.
+  double metres(int i, double d) const { return (d + 0.5 * view.sign[i]) * res; }
+  std::int64_t span(int i) const { return hi[i] - lo[i] + 1; }
+  double colour_t(std::int64_t up) const {
+    return static_cast<double>(up - colour_lo) /
+           static_cast<double>(std::max<std::int64_t>(colour_hi - colour_lo, 1));
+  }
 };
 
-/// Renders `map` with at most `max_side` pixels of map per image side (large maps are drawn
-/// with several voxels per pixel, small ones zoomed up to 8 pixels per voxel).
+namespace detail {
+
 template <class Key>
-Picture render_map_picture(const OccupancyMap<Key>& map, std::int64_t max_side = 1600) {
-  constexpr std::int64_t kMargin = 8;
-  std::int64_t lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = std::numeric_limits<std::int64_t>::max();
-    hi[a] = std::numeric_limits<std::int64_t>::min();
-  }
-  map.for_each_voxel([&](const Key& k, float) {
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min<std::int64_t>(lo[a], k[a]);
-      hi[a] = std::max<std::int64_t>(hi[a], k[a]);
-    }
-  });
-  Picture pic;
-  if (map.empty()) return pic;
-  const std::int64_t span[3] = {hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
-  const std::int64_t longest = std::max(span[0], span[1] + span[2]);
-  const std::int64_t s = (longest + max_side - 1) / max_side;  // voxels per pixel
-  const std::int64_t w = (span[0] + s - 1) / s, ht = (span[1] + s - 1) / s,
-                     hs = (span[2] + s - 1) / s;
-  pic.voxels_per_pixel = s;
-  pic.width = static_cast<std::uint32_t>(w + 2 * kMargin);
-  pic.height = static_cast<std::uint32_t>(ht + hs + 3 * kMargin);
-
-  // Per pixel: highest occupied z (top view) / nearest occupied y (side view), -1 = none;
-  // free flags for known-free space.
-  std::vector<std::int32_t> top(static_cast<std::size_t>(w * ht), -1),
-      side(static_cast<std::size_t>(w * hs), -1);
-  std::vector<std::uint8_t> top_free(top.size(), 0), side_free(side.size(), 0);
-  map.for_each_voxel([&](const Key& k, float v) {
-    const std::int64_t px = (k[0] - lo[0]) / s;
-    const std::size_t t = static_cast<std::size_t>((hi[1] - k[1]) / s * w + px);
-    const std::size_t d = static_cast<std::size_t>((hi[2] - k[2]) / s * w + px);
-    if (!map.is_occupied(v)) {
-      top_free[t] = side_free[d] = 1;
-      return;
-    }
-    const auto z = static_cast<std::int32_t>(k[2] - lo[2]);
-    const auto y = static_cast<std::int32_t>(k[1] - lo[1]);
-    top[t] = std::max(top[t], z);
-    if (side[d] < 0 || y < side[d]) side[d] = y;
-  });
-
-  pic.rgb.assign(std::size_t{pic.width} * pic.height * 3, 255);
-  auto paint = [&](std::int64_t x, std::int64_t y, const std::array<std::uint8_t, 3>& c) {
-    std::uint8_t* p = &pic.rgb[static_cast<std::size_t>((y * pic.width + x) * 3)];
-    p[0] = c[0];
-    p[1] = c[1];
-    p[2] = c[2];
-  };
-  const std::array<std::uint8_t, 3> free_colour{225, 228, 232}, frame{150, 150, 150};
-  const double zr = static_cast<double>(std::max<std::int64_t>(span[2] - 1, 1));
-  const double yr = static_cast<double>(std::max<std::int64_t>(span[1] - 1, 1));
-  for (std::int64_t r = 0; r < ht; ++r) {
-    for (std::int64_t x = 0; x < w; ++x) {
-      const std::size_t i = static_cast<std::size_t>(r * w + x);
-      if (top[i] >= 0)
-        paint(x + kMargin, r + kMargin, io::detail::height_colour(top[i] / zr));
-      else if (top_free[i])
-        paint(x + kMargin, r + kMargin, free_colour);
-    }
-  }
-  const std::int64_t side_y0 = ht + 2 * kMargin;
-  for (std::int64_t r = 0; r < hs; ++r) {
-    const double height = static_cast<double>(span[2] - 1 - r * s) / zr;
-    for (std::int64_t x = 0; x < w; ++x) {
-      const std::size_t i = static_cast<std::size_t>(r * w + x);
-      if (side[i] >= 0) {
-        auto c = io::detail::height_colour(height);
-        const double shade = 1.0 - 0.55 * side[i] / yr;
-        for (auto& ch : c) ch = static_cast<std::uint8_t>(ch * shade);
-        paint(x + kMargin, side_y0 + r, c);
-      } else if (side_free[i]) {
-        paint(x + kMargin, side_y0 + r, free_colour);
-      }
-    }
-  }
-  // Thin frames around both views.
-  auto box = [&](std::int64_t y0, std::int64_t rows) {
-    for (std::int64_t x = kMargin - 1; x <= kMargin + w; ++x) {
-      paint(x, y0 - 1, frame);
-      paint(x, y0 + rows, frame);
-    }
-    for (std::int64_t y = y0 - 1; y <= y0 + rows; ++y) {
-      paint(kMargin - 1, y, frame);
-      paint(kMargin + w, y, frame);
-    }
-  };
-  box(kMargin, ht);
-  box(side_y0, hs);
-  // Small maps: nearest-neighbour zoom so a voxel is several pixels wide.
-  const std::int64_t zoom = std::clamp<std::int64_t>(1000 / (longest + 1), 1, 8);
-  if (zoom > 1) {
-    Picture big;
-    big.voxels_per_pixel = 1;
-    big.width = static_cast<std::uint32_t>(pic.width * zoom);
-    big.height = static_cast<std::uint32_t>(pic.height * zoom);
-    big.rgb.resize(std::size_t{big.width} * big.height * 3);
-    const auto z = static_cast<std::size_t>(zoom);
-    for (std::size_t y = 0; y < big.height; ++y)
-      for (std::size_t x = 0; x < big.width; ++x)
-        for (std::size_t c = 0; c < 3; ++c)
-          big.rgb[(y * big.width + x) * 3 + c] = pic.rgb[((y / z) * pic.width + x / z) * 3 + c];
-    return big;
-  }
-  return pic;
+std::array<std::int64_t, 3> display_coords(const ViewFrame& f, const Key& k) {
+  std::array<std::int64_t, 3> d{};
+  for (int i = 0; i < 3; ++i)
+    d[i] = f.sign[i] * (static_cast<std::int64_t>(k[f.axis[i]]) - Key::center);
+  return d;
 }
 
-/// Renders and writes a PNG; an empty map is an io::Error naming the file.
+inline std::int64_t percentile(std::vector<std::int64_t>& v, double q) {
+  const auto n = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5);
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n), v.end());
+  return v[n];
+}
+
+/// A round length (1, 2 or 5 times a power of ten) near `x`.
+inline double nice_length(double x) {
+  const double p = std::pow(10.0, std::floor(std::log10(x)));
+  for (const double m : {1.0, 2.0, 5.0})
+    if (m * p >= x * 0.7) return m * p;
+  return 10.0 * p;
+}
+
+inline std::string metres_text(double m) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, std::abs(m) >= 10 || m == std::round(m) ? "%.0f m" : "%.1f m", m);
+  if (std::abs(m) < 1 && m != 0 && std::abs(m * 10 - std::round(m * 10)) > 1e-9)
+    std::snprintf(buf, sizeof buf, "%.2f m", m);
+  return buf;
+}
+
+}  // namespace detail
+
+/// Fits the drawn region to the occupied voxels of `maps` (all at one resolution), with up along
+/// `up`, at most `max_side` pixels of map per side before zooming.
 template <class Key>
-void write_map_png(const std::string& path, const OccupancyMap<Key>& map) {
-  if (map.empty()) throw io::Error(path, "the map is empty: nothing to draw");
-  const Picture pic = render_map_picture(map);
-  io::write_png(path, pic.width, pic.height, pic.rgb);
+PictureFrame fit_picture_frame(const std::vector<const OccupancyMap<Key>*>& maps, UpAxis up,
+                               std::int64_t max_side = 1000) {
+  PictureFrame fr;
+  fr.view = ViewFrame(up);
+  std::array<std::vector<std::int64_t>, 3> c;
+  for (const auto* m : maps) {
+    fr.res = m->grid().resolution();
+    m->for_each_voxel([&](const Key& k, float v) {
+      if (!m->is_occupied(v)) return;
+      const auto d = detail::display_coords(fr.view, k);
+      for (int i = 0; i < 3; ++i) c[i].push_back(d[i]);
+    });
+  }
+  if (c[0].empty()) return fr;
+  fr.empty = false;
+  for (int i = 0; i < 3; ++i) {
+    const auto [mn, mx] = std::minmax_element(c[i].begin(), c[i].end());
+    const std::int64_t lo = *mn, hi = *mx;
+    std::vector<std::int64_t> v = c[i];
+    const std::int64_t plo = detail::percentile(v, 0.005), phi = detail::percentile(v, 0.995);
+    const std::int64_t pad = std::max<std::int64_t>(2, (phi - plo) / 20);
+    fr.lo[i] = std::max(lo, plo - pad);
+    fr.hi[i] = std::min(hi, phi + pad);
+  }
+  // Heights inside the drawn region: colour scale and ceiling.
+  std::vector<std::int64_t> heights;
+  std::vector<std::size_t> level(static_cast<std::size_t>(fr.span(2)), 0);
+  const std::int64_t w = fr.span(0), h = fr.span(1);
+  const bool columns_ok = w * h <= (std::int64_t{1} << 26);
+  std::vector<std::uint8_t> column(columns_ok ? static_cast<std::size_t>(w * h) : 0, 0);
+  std::size_t footprint = 0;
+  for (std::size_t j = 0; j < c[0].size(); ++j) {
+    const std::int64_t d[3] = {c[0][j], c[1][j], c[2][j]};
+    bool in = true;
+    for (int i = 0; i < 3; ++i) in = in && d[i] >= fr.lo[i] && d[i] <= fr.hi[i];
+    if (!in) continue;
+    heights.push_back(d[2]);
+    ++level[static_cast<std::size_t>(d[2] - fr.lo[2])];
+    if (columns_ok) {
+      auto& col = column[static_cast<std::size_t>((d[1] - fr.lo[1]) * w + (d[0] - fr.lo[0]))];
+      footprint += col == 0;
+      col = 1;
+    }
+  }
+  fr.colour_lo = detail::percentile(heights, 0.02);
+  fr.colour_hi = std::max(detail::percentile(heights, 0.98), fr.colour_lo + 1);
+  if (columns_ok && fr.span(2) >= 10) {
+    auto dense = [&](std::int64_t u) {
+      return level[static_cast<std::size_t>(u - fr.lo[2])] * 4 >= footprint;
+    };
+    const std::int64_t floor_of_search = fr.lo[2] + fr.span(2) * 6 / 10;
+    for (std::int64_t u = fr.hi[2]; u >= floor_of_search; --u) {
+      if (!dense(u)) continue;
+      while (u - 1 >= floor_of_search && dense(u - 1)) --u;
+      fr.cut = u;
+      fr.ceiling_cut = true;
+      break;
+    }
+  }
+  const std::int64_t longest = std::max(fr.span(0), fr.span(1) + fr.span(2));
+  fr.step = (longest + max_side - 1) / max_side;
+  fr.zoom = std::clamp<std::int64_t>(800 / (longest / fr.step + 1), 1, 6);
+  return fr;
+}
+
+/// One panel: title line, top view, scale bar, side view, notes.
+template <class Key>
+Image render_picture_panel(const OccupancyMap<Key>& map, const PictureFrame& fr,
+                           const std::string& title) {
+  const std::int64_t s = fr.step, z = fr.zoom;
+  const std::int64_t w = (fr.span(0) + s - 1) / s, ht = (fr.span(1) + s - 1) / s,
+                     hs = (fr.span(2) + s - 1) / s;
+  // Per pixel: highest occupied up (top view, below the cut) / nearest forward (side view).
+  constexpr std::int64_t none = std::numeric_limits<std::int64_t>::min();
+  std::vector<std::int64_t> top(static_cast<std::size_t>(w * ht), none),
+      side(static_cast<std::size_t>(w * hs), none);
+  std::vector<std::uint8_t> top_free(top.size(), 0), side_free(side.size(), 0);
+  std::size_t beyond = 0;
+  map.for_each_voxel([&](const Key& k, float v) {
+    const auto d = detail::display_coords(fr.view, k);
+    const bool occ = map.is_occupied(v);
+    for (int i = 0; i < 3; ++i)
+      if (d[i] < fr.lo[i] || d[i] > fr.hi[i]) {
+        beyond += occ;
+        return;
+      }
+    const std::int64_t px = (d[0] - fr.lo[0]) / s;
+    const auto t = static_cast<std::size_t>((fr.hi[1] - d[1]) / s * w + px);
+    const auto e = static_cast<std::size_t>((fr.hi[2] - d[2]) / s * w + px);
+    if (!occ) {
+      side_free[e] = 1;
+      if (d[2] < fr.cut) top_free[t] = 1;
+      return;
+    }
+    if (d[2] < fr.cut) top[t] = std::max(top[t], d[2]);
+    if (side[e] == none || -d[1] > side[e]) side[e] = -d[1];  // nearest = smallest forward
+  });
+
+  const auto counts = map.count_voxels();
+  char line[256];
+  std::snprintf(line, sizeof line, "%g m voxels  occupied %zu  free %zu", fr.res, counts.occupied,
+                counts.free);
+  std::vector<std::string> notes;
+  if (fr.ceiling_cut)
+    notes.push_back("top view: below " + detail::metres_text(fr.metres(2, double(fr.cut) - 0.5)) +
+                    " (ceiling cut)");
+  if (beyond) notes.push_back(std::to_string(beyond) + " occupied beyond the drawn extent");
+
+  const std::int64_t m = 10, pw = w * z, title_scale = text_width(title, 2) <= pw ? 2 : 1;
+  const std::int64_t width =
+      std::max({pw, text_width(title, static_cast<int>(title_scale)), text_width(line)}) + 2 * m;
+  std::int64_t y = m;
+  const std::int64_t y_line = y + 7 * title_scale + 5, y_top = y_line + 7 + 18,
+                     y_scale = y_top + ht * z + 6, y_side = y_scale + 7 + 8 + 18,
+                     height =
+                         y_side + hs * z + 8 + static_cast<std::int64_t>(notes.size()) * 11 + m;
+  Image img(static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height));
+  draw_text(img, m, y, title, kTextColour, static_cast<int>(title_scale));
+  draw_text(img, m, y_line, line, kNoteColour);
+  const std::string r = std::string(fr.view.sign[0] < 0 ? "-" : "") + char('x' + fr.view.axis[0]),
+                    f = std::string(fr.view.sign[1] < 0 ? "-" : "") + char('x' + fr.view.axis[1]);
+  draw_text(img, m, y_top - 11, "top view (" + r + " right, " + f + " up)", kNoteColour);
+  draw_text(img, m, y_side - 11, "side view (" + r + " right, " + fr.view.up.name() + " up)",
+            kNoteColour);
+
+  const double yr = static_cast<double>(std::max<std::int64_t>(fr.span(1) - 1, 1));
+  auto plot = [&](std::int64_t x0, std::int64_t y0, std::int64_t rows, bool is_top) {
+    for (std::int64_t rr = 0; rr < rows; ++rr)
+      for (std::int64_t x = 0; x < w; ++x) {
+        const auto i = static_cast<std::size_t>(rr * w + x);
+        Rgb col{255, 255, 255};
+        if (is_top && top[i] != none) {
+          col = io::detail::height_colour(fr.colour_t(top[i]));
+        } else if (!is_top && side[i] != none) {
+          col = io::detail::height_colour(fr.colour_t(fr.hi[2] - rr * s));
+          const double shade = 1.0 - 0.5 * static_cast<double>(-side[i] - fr.lo[1]) / yr;
+          for (auto& ch : col) ch = static_cast<std::uint8_t>(ch * shade);
+        } else if (is_top ? top_free[i] : side_free[i]) {
+          col = kFreeColour;
+        } else {
+          continue;
+        }
+        img.fill_rect(x0 + x * z, y0 + rr * z, z, z, col);
+      }
+    for (std::int64_t x = x0 - 1; x <= x0 + w * z; ++x) {
+      img.set(x, y0 - 1, kFrameColour);
+      img.set(x, y0 + rows * z, kFrameColour);
+    }
+    for (std::int64_t yy = y0 - 1; yy <= y0 + rows * z; ++yy) {
+      img.set(x0 - 1, yy, kFrameColour);
+      img.set(x0 + w * z, yy, kFrameColour);
+    }
+  };
+  plot(m, y_top, ht, true);
+  plot(m, y_side, hs, false);
+
+  // Scale bar: a round length of about a quarter of the view.
+  const double px_m = fr.res * static_cast<double>(s) / static_cast<double>(z);  // metres/pixel
+  const double len = detail::nice_length(static_cast<double>(pw) * px_m / 4.0);
+  const auto bar = static_cast<std::int64_t>(std::lround(len / px_m));
+  img.fill_rect(m, y_scale + 3, bar, 2, kTextColour);
+  img.fill_rect(m, y_scale, 1, 8, kTextColour);
+  img.fill_rect(m + bar - 1, y_scale, 1, 8, kTextColour);
+  draw_text(img, m + bar + 5, y_scale + 1, detail::metres_text(len), kTextColour);
+  for (std::size_t i = 0; i < notes.size(); ++i)
+    draw_text(img, m, y_side + hs * z + 8 + static_cast<std::int64_t>(i) * 11, notes[i],
+              kNoteColour);
+  return img;
+}
+
+/// The colour legend: height in metres along the up axis, and the free colour.
+inline Image render_picture_legend(const PictureFrame& fr, std::int64_t bar_height = 200) {
+  const std::int64_t m = 10, bw = 16;
+  Image img(static_cast<std::uint32_t>(125), static_cast<std::uint32_t>(bar_height + 3 * m + 40));
+  draw_text(img, m, m, "height (" + fr.view.up.name() + ")", kTextColour);
+  const std::int64_t y0 = m + 14;
+  for (std::int64_t y = 0; y < bar_height; ++y)
+    img.fill_rect(m, y0 + y, bw, 1,
+                  io::detail::height_colour(1.0 - static_cast<double>(y) / double(bar_height - 1)));
+  const double lo = fr.metres(2, static_cast<double>(fr.colour_lo)),
+               hi = fr.metres(2, static_cast<double>(fr.colour_hi));
+  const double tick = detail::nice_length(std::max(hi - lo, fr.res) / 4.0);
+  for (double v = std::ceil(lo / tick) * tick; v <= hi + 1e-9; v += tick) {
+    const auto y = y0 + static_cast<std::int64_t>(std::lround((hi - v) / (hi - lo) *
+                                                              static_cast<double>(bar_height - 1)));
+    img.fill_rect(m + bw, y, 4, 1, kTextColour);
+    draw_text(img, m + bw + 7, y - 3, detail::metres_text(std::abs(v) < 1e-9 ? 0.0 : v),
+              kTextColour);
+  }
+  const std::int64_t yf = y0 + bar_height + m;
+  img.fill_rect(m, yf, bw, 10, kFreeColour);
+  draw_text(img, m + bw + 7, yf + 2, "free", kTextColour);
+  draw_text(img, m, yf + 18, "clipped to 2-98 %", kNoteColour);
+  return img;
+}
+
+/// Panels side by side, top-aligned, with the legend at the right.
+inline Image side_by_side(const std::vector<Image>& parts) {
+  std::int64_t w = 0, h = 0;
+  for (const Image& p : parts) {
+    w += p.width;
+    h = std::max<std::int64_t>(h, p.height);
+  }
+  Image out(static_cast<std::uint32_t>(w), static_cast<std::uint32_t>(h));
+  std::int64_t x = 0;
+  for (const Image& p : parts) {
+    out.blit(p, x, 0);
+    x += p.width;
+  }
+  return out;
+}
+
+/// Picture of one map (title: what it is, e.g. "OctoMap model"); io::Error naming `path` when
+/// the map has no occupied voxel.
+template <class Key>
+Image render_map_picture(const OccupancyMap<Key>& map, UpAxis up, const std::string& title,
+                         const std::string& path = "<picture>") {
+  const PictureFrame fr = fit_picture_frame<Key>({&map}, up);
+  if (fr.empty) throw io::Error(path, "the map has no occupied voxel: nothing to draw");
+  const Image panel = render_picture_panel(map, fr, title);
+  return side_by_side(
+      {panel, render_picture_legend(
+                  fr, std::min<std::int64_t>(200, std::max<std::int64_t>(80, panel.height - 90)))});
+}
+
+template <class Key>
+void write_map_png(const std::string& path, const OccupancyMap<Key>& map, UpAxis up,
+                   const std::string& title) {
+  const Image img = render_map_picture(map, up, title, path);
+  write_png_compressed(path, img.width, img.height, img.rgb);
+}
+
+/// Several maps side by side in one picture, all with the same extent and colour scale (fitted
+/// to all of them), and one legend: e.g. OctoMap model | k-NN model | reference.
+inline void write_comparison_png(
+    const std::string& path,
+    const std::vector<std::pair<std::string, const OccupancyMap<OcKey>*>>& maps, UpAxis up) {
+  using Key = OcKey;
+  std::vector<const OccupancyMap<Key>*> ptrs;
+  for (const auto& m : maps) ptrs.push_back(m.second);
+  const PictureFrame fr = fit_picture_frame<Key>(ptrs, up, 400);
+  if (fr.empty) throw io::Error(path, "the maps have no occupied voxel: nothing to draw");
+  std::vector<Image> parts;
+  std::int64_t h = 0;
+  for (const auto& m : maps) {
+    parts.push_back(render_picture_panel(*m.second, fr, m.first));
+    h = std::max<std::int64_t>(h, parts.back().height);
+  }
+  parts.push_back(render_picture_legend(fr, std::clamp<std::int64_t>(h - 90, 80, 200)));
+  const Image img = side_by_side(parts);
+  write_png_compressed(path, img.width, img.height, img.rgb);
 }
 
 }  // namespace knnocc::cli

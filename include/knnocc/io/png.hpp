@@ -2,12 +2,14 @@
 // A tiny self-contained PNG writer (no zlib): 8-bit RGB, no filtering, the image data in
 // "stored" (uncompressed) deflate blocks, with the CRC-32 of every chunk and the Adler-32 of
 // the zlib stream. Files are as large as the raw pixels (3 bytes each) plus ~0.1 %; every PNG
-// reader opens them.
+// reader opens them. A caller with a deflate implementation (the knnocc tool uses zlib) passes
+// it as `zlib_stream` and gets compressed files; the library itself needs none.
 
 #include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -46,25 +48,7 @@ inline void png_chunk(std::string& out, const char* type, const std::string& dat
                              out.size() - start));
 }
 
-}  // namespace detail
-
-/// PNG bytes of a width x height RGB image (rgb: 3 bytes per pixel, rows top to bottom).
-inline std::string encode_png(std::uint32_t width, std::uint32_t height,
-                              const std::vector<std::uint8_t>& rgb) {
-  if (width == 0 || height == 0 || rgb.size() / 3 / width != height ||
-      rgb.size() != std::size_t{width} * height * 3) {
-    throw Error("<png>", "image of " + std::to_string(width) + " x " + std::to_string(height) +
-                             " pixels needs " + std::to_string(std::size_t{width} * height * 3) +
-                             " bytes, got " + std::to_string(rgb.size()));
-  }
-  const std::size_t row = std::size_t{width} * 3;
-  // Raw zlib payload: each row prefixed by its filter type (0: none).
-  std::string raw;
-  raw.reserve((row + 1) * height);
-  for (std::uint32_t y = 0; y < height; ++y) {
-    raw += '\0';
-    raw.append(reinterpret_cast<const char*>(rgb.data()) + y * row, row);
-  }
+inline std::string stored_zlib(const std::string& raw) {
   std::string z = "\x78\x01";  // deflate, 32 K window, no dictionary, fastest
   std::size_t pos = 0;
   do {
@@ -83,7 +67,35 @@ inline std::string encode_png(std::uint32_t width, std::uint32_t height,
     a = (a + static_cast<unsigned char>(c)) % 65521u;
     b = (b + a) % 65521u;
   }
-  detail::put_be32(z, (b << 16) | a);
+  put_be32(z, (b << 16) | a);
+  return z;
+}
+
+}  // namespace detail
+
+/// Turns the filtered image bytes into a complete zlib stream (header, deflate data, Adler-32).
+using ZlibStream = std::function<std::string(const std::string& raw)>;
+
+/// PNG bytes of a width x height RGB image (rgb: 3 bytes per pixel, rows top to bottom); the
+/// image data in stored blocks, or compressed by `zlib_stream` when given.
+inline std::string encode_png(std::uint32_t width, std::uint32_t height,
+                              const std::vector<std::uint8_t>& rgb,
+                              const ZlibStream& zlib_stream = {}) {
+  if (width == 0 || height == 0 || rgb.size() / 3 / width != height ||
+      rgb.size() != std::size_t{width} * height * 3) {
+    throw Error("<png>", "image of " + std::to_string(width) + " x " + std::to_string(height) +
+                             " pixels needs " + std::to_string(std::size_t{width} * height * 3) +
+                             " bytes, got " + std::to_string(rgb.size()));
+  }
+  const std::size_t row = std::size_t{width} * 3;
+  // Raw zlib payload: each row prefixed by its filter type (0: none).
+  std::string raw;
+  raw.reserve((row + 1) * height);
+  for (std::uint32_t y = 0; y < height; ++y) {
+    raw += '\0';
+    raw.append(reinterpret_cast<const char*>(rgb.data()) + y * row, row);
+  }
+  const std::string z = zlib_stream ? zlib_stream(raw) : detail::stored_zlib(raw);
 
   std::string out = "\x89PNG\r\n\x1a\n";
   std::string ihdr;
@@ -98,10 +110,10 @@ inline std::string encode_png(std::uint32_t width, std::uint32_t height,
 
 /// Writes the image atomically (temp file + rename).
 inline void write_png(const std::string& path, std::uint32_t width, std::uint32_t height,
-                      const std::vector<std::uint8_t>& rgb) {
+                      const std::vector<std::uint8_t>& rgb, const ZlibStream& zlib_stream = {}) {
   std::string bytes;
   try {
-    bytes = encode_png(width, height, rgb);
+    bytes = encode_png(width, height, rgb, zlib_stream);
   } catch (const Error& e) {
     throw Error(path, e.problem());
   }

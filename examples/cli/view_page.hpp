@@ -1,0 +1,268 @@
+#pragma once
+// knnocc view pages: one self-contained HTML file (three.js embedded, no network at view time)
+// that shows maps in 3D. The occupied voxels are sent as cells with a mask of their exposed faces
+// (a face between two occupied cells is never drawn) and drawn as instanced quads, coloured by
+// height in the vertex shader. When a map has more exposed faces than the budget, the page draws
+// a coarser level (cells of 2, 4, ... voxels: a cell is occupied when any voxel in it is) and
+// says so; free voxels (on a toggle) are points, coarsened the same way.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <unordered_set>
+#include <vector>
+
+#include <knnocc/io/atomic_file.hpp>
+#include <knnocc/io/error.hpp>
+#include <knnocc/map/occupancy_map.hpp>
+
+#include "view_frame.hpp"
+#include "view_page_script.hpp"
+
+#ifdef KNNOCC_TOOL_THREE_JS
+#include "knnocc_three_js.hpp"
+#endif
+
+namespace knnocc::cli {
+
+struct ViewMap {
+  std::string name;
+  const OccupancyMap<OcKey>* map = nullptr;
+};
+
+struct ViewOptions {
+  std::size_t max_faces = 1500000;  ///< exposed faces drawn per map before coarsening
+  std::size_t max_free = 300000;    ///< free cells drawn per map before coarsening
+};
+
+/// Whether this build can write pages (three.js found at configure time).
+inline bool view_pages_available() {
+#ifdef KNNOCC_TOOL_THREE_JS
+  return true;
+#else
+  return false;
+#endif
+}
+
+namespace detail {
+
+inline std::string base64(const std::string& in) {
+  static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((in.size() + 2) / 3 * 4);
+  std::size_t i = 0;
+  for (; i + 2 < in.size(); i += 3) {
+    const std::uint32_t v = (std::uint32_t(std::uint8_t(in[i])) << 16) |
+                            (std::uint32_t(std::uint8_t(in[i + 1])) << 8) | std::uint8_t(in[i + 2]);
+    for (int s = 18; s >= 0; s -= 6) out += t[(v >> s) & 63u];
+  }
+  if (i < in.size()) {
+    std::uint32_t v = std::uint32_t(std::uint8_t(in[i])) << 16;
+    if (i + 1 < in.size()) v |= std::uint32_t(std::uint8_t(in[i + 1])) << 8;
+    out += t[(v >> 18) & 63u];
+    out += t[(v >> 12) & 63u];
+    out += i + 1 < in.size() ? t[(v >> 6) & 63u] : '=';
+    out += '=';
+  }
+  return out;
+}
+
+inline void put_u16(std::string& s, std::int64_t v) {
+  s += static_cast<char>(v & 0xFF);
+  s += static_cast<char>((v >> 8) & 0xFF);
+}
+
+inline std::uint64_t pack_cell(std::int64_t x, std::int64_t y, std::int64_t z) {
+  return (static_cast<std::uint64_t>(x) << 42) | (static_cast<std::uint64_t>(y) << 21) |
+         static_cast<std::uint64_t>(z);
+}
+
+/// Cells (page axes: X right, Y up, Z towards the viewer) of one map at one level.
+struct PageCells {
+  int level = 0;
+  std::string cells, masks;  // u16 x 3 per cell; exposed-face bits +X -X +Y -Y +Z -Z
+  std::size_t count = 0, faces = 0;
+};
+
+inline PageCells occupied_cells(const std::vector<std::array<std::int64_t, 3>>& vox, int level) {
+  std::unordered_set<std::uint64_t> set;
+  set.reserve(vox.size());
+  for (const auto& v : vox) set.insert(pack_cell(v[0] >> level, v[1] >> level, v[2] >> level));
+  std::vector<std::uint64_t> sorted(set.begin(), set.end());
+  std::sort(sorted.begin(), sorted.end());
+  PageCells pc;
+  pc.level = level;
+  pc.count = sorted.size();
+  const std::uint64_t m = (std::uint64_t{1} << 21) - 1;
+  for (const std::uint64_t c : sorted) {
+    const auto x = static_cast<std::int64_t>(c >> 42), y = static_cast<std::int64_t>((c >> 21) & m),
+               z = static_cast<std::int64_t>(c & m);
+    int mask = 0;
+    const std::int64_t nb[6][3] = {{x + 1, y, z}, {x - 1, y, z}, {x, y + 1, z},
+                                   {x, y - 1, z}, {x, y, z + 1}, {x, y, z - 1}};
+    for (int f = 0; f < 6; ++f) {
+      const bool outside = nb[f][0] < 0 || nb[f][1] < 0 || nb[f][2] < 0;
+      if (outside || !set.count(pack_cell(nb[f][0], nb[f][1], nb[f][2]))) {
+        mask |= 1 << f;
+        ++pc.faces;
+      }
+    }
+    if (!mask) continue;  // interior: nothing to draw
+    put_u16(pc.cells, x);
+    put_u16(pc.cells, y);
+    put_u16(pc.cells, z);
+    pc.masks += static_cast<char>(mask);
+  }
+  return pc;
+}
+
+inline double percentile_of(std::vector<double> v, double q) {
+  const auto n = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5);
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n), v.end());
+  return v[n];
+}
+
+inline std::string json_string(const std::string& s) {
+  std::string o = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    if (c == '<') {
+      o += "\\u003c";
+      continue;
+    }
+    if (static_cast<unsigned char>(c) < 0x20) continue;
+    o += c;
+  }
+  return o + "\"";
+}
+
+}  // namespace detail
+
+/// The whole page for `maps` (at least one, each with an occupied voxel).
+inline std::string view_page_html(const std::vector<ViewMap>& maps, UpAxis up,
+                                  const ViewOptions& opt) {
+  const ViewFrame vf(up);
+  // Page axes: X = right, Y = up, Z = -forward (three.js is right-handed with Y up).
+  const std::array<int, 3> page_axis{vf.axis[0], vf.axis[2], vf.axis[1]};
+  const std::array<int, 3> page_sign{vf.sign[0], vf.sign[2], -vf.sign[1]};
+  std::vector<double> all_heights;
+  std::string maps_json;
+  for (const ViewMap& vm : maps) {
+    const auto& map = *vm.map;
+    const double res = map.grid().resolution();
+    std::vector<std::array<std::int64_t, 3>> occ, fre;
+    map.for_each_voxel([&](const OcKey& k, float v) {
+      std::array<std::int64_t, 3> d{};
+      for (int i = 0; i < 3; ++i)
+        d[i] = page_sign[i] * (static_cast<std::int64_t>(k[page_axis[i]]) - OcKey::center);
+      (map.is_occupied(v) ? occ : fre).push_back(d);
+    });
+    std::array<std::int64_t, 3> lo{};
+    for (int i = 0; i < 3; ++i) {
+      lo[i] = std::numeric_limits<std::int64_t>::max();
+      for (const auto* set : {&occ, &fre})
+        for (const auto& d : *set) lo[i] = std::min(lo[i], d[i]);
+    }
+    for (auto* set : {&occ, &fre})
+      for (auto& d : *set)
+        for (int i = 0; i < 3; ++i) d[i] -= lo[i];
+    detail::PageCells pc;
+    for (int level = 0; level <= 16; ++level) {
+      pc = detail::occupied_cells(occ, level);
+      if (pc.faces <= opt.max_faces) break;
+    }
+    // Free cells: coarsened until within budget; cells holding an occupied voxel are left out.
+    int free_level = 0;
+    std::vector<std::uint64_t> free_cells;
+    for (; free_level <= 16; ++free_level) {
+      std::unordered_set<std::uint64_t> occ_cells, seen;
+      for (const auto& d : occ)
+        occ_cells.insert(
+            detail::pack_cell(d[0] >> free_level, d[1] >> free_level, d[2] >> free_level));
+      free_cells.clear();
+      for (const auto& d : fre) {
+        const auto c =
+            detail::pack_cell(d[0] >> free_level, d[1] >> free_level, d[2] >> free_level);
+        if (!occ_cells.count(c) && seen.insert(c).second) free_cells.push_back(c);
+      }
+      if (free_cells.size() <= opt.max_free) break;
+    }
+    std::sort(free_cells.begin(), free_cells.end());
+    std::string free_bytes;
+    const std::uint64_t m21 = (std::uint64_t{1} << 21) - 1;
+    for (const std::uint64_t c : free_cells) {
+      detail::put_u16(free_bytes, static_cast<std::int64_t>(c >> 42));
+      detail::put_u16(free_bytes, static_cast<std::int64_t>((c >> 21) & m21));
+      detail::put_u16(free_bytes, static_cast<std::int64_t>(c & m21));
+    }
+    // Metres of voxel index 0 (its lower corner) per page axis: a voxel with display index d
+    // spans [d, d + 1] * res when the axis keeps the map's sign, [d - 1, d] * res otherwise.
+    std::array<double, 3> origin{};
+    for (int i = 0; i < 3; ++i)
+      origin[i] = static_cast<double>(lo[i] + (page_sign[i] < 0 ? -1 : 0)) * res;
+    // Robust centre and size for the camera (outliers do not push the map out of view).
+    std::array<double, 3> centre{}, half{};
+    for (int i = 0; i < 3; ++i) {
+      std::vector<double> v;
+      v.reserve(occ.size());
+      for (const auto& d : occ) v.push_back((static_cast<double>(d[i]) + 0.5) * res + origin[i]);
+      const double a = detail::percentile_of(v, 0.01), b = detail::percentile_of(v, 0.99);
+      centre[i] = 0.5 * (a + b);
+      half[i] = 0.5 * (b - a) + res;
+      if (i == 1)
+        for (const double h : v) all_heights.push_back(h);
+    }
+    const auto counts = map.count_voxels();
+    char buf[1024];
+    std::snprintf(buf, sizeof buf,
+                  "{\"name\":%s,\"res\":%.9g,\"occupied\":%zu,\"free\":%zu,\"level\":%d,"
+                  "\"cells\":%zu,\"drawnCells\":%zu,\"faces\":%zu,\"freeLevel\":%d,"
+                  "\"freeCells\":%zu,\"origin\":[%.9g,%.9g,%.9g],\"centre\":[%.6g,%.6g,%.6g],"
+                  "\"half\":[%.6g,%.6g,%.6g],",
+                  detail::json_string(vm.name).c_str(), res, counts.occupied, counts.free, pc.level,
+                  pc.count, pc.masks.size(), pc.faces, free_level, free_cells.size(), origin[0],
+                  origin[1], origin[2], centre[0], centre[1], centre[2], half[0], half[1], half[2]);
+    maps_json += std::string(maps_json.empty() ? "" : ",\n") + buf + "\"cellData\":\"" +
+                 detail::base64(pc.cells) + "\",\"maskData\":\"" + detail::base64(pc.masks) +
+                 "\",\"freeData\":\"" + detail::base64(free_bytes) + "\"}";
+  }
+  const double h_lo = detail::percentile_of(all_heights, 0.02),
+               h_hi = std::max(detail::percentile_of(all_heights, 0.98), h_lo + 1e-3);
+  auto axis_name = [](int a, int s) { return std::string(s < 0 ? "-" : "") + char('x' + a); };
+  char head[512];
+  std::snprintf(head, sizeof head,
+                "{\"up\":\"%s\",\"right\":\"%s\",\"forward\":\"%s\",\"heightLo\":%.6g,"
+                "\"heightHi\":%.6g,\"maxFaces\":%zu,\"maps\":[\n",
+                up.name().c_str(), axis_name(vf.axis[0], vf.sign[0]).c_str(),
+                axis_name(vf.axis[1], vf.sign[1]).c_str(), h_lo, h_hi, opt.max_faces);
+  std::string html = detail::kViewPageHead;
+#ifdef KNNOCC_TOOL_THREE_JS
+  html += "<script>\n";
+  for (const char* piece : detail::kThreeJsPieces) html += piece;
+  html += "\n</script>\n";
+#endif
+  html += "<script>\nconst KNNOCC_DATA = " + std::string(head) + maps_json + "]};\n</script>\n";
+  html += detail::kViewPageScript;
+  return html;
+}
+
+/// Writes the page atomically; io::Error naming `path` for an empty map or a build without
+/// three.js.
+inline void write_view_page(const std::string& path, const std::vector<ViewMap>& maps, UpAxis up,
+                            const ViewOptions& opt) {
+  if (!view_pages_available())
+    throw io::Error(path,
+                    "this knnocc was built without three.js (install libjs-three and "
+                    "configure again)");
+  for (const ViewMap& vm : maps)
+    if (vm.map->count_voxels().occupied == 0)
+      throw io::Error(path, "map '" + vm.name + "' has no occupied voxel: nothing to draw");
+  io::AtomicFile out(path);
+  out.write(view_page_html(maps, up, opt));
+  out.commit();
+}
+
+}  // namespace knnocc::cli

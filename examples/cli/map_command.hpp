@@ -15,6 +15,7 @@
 #include <knnocc/sensor/knn_model.hpp>
 
 #include "args.hpp"
+#include "live_corrections.hpp"
 #include "map_outputs.hpp"
 #include "progress.hpp"
 
@@ -51,6 +52,10 @@ options:
 )") + map_outputs_help() +
          R"(  --threads N           threads that walk the rays of each cloud (default 1); the map is the
                         same for every N
+  --corrections DIR     SLAM pose corrections: DIR/after_NNNNNN.txt, the poses of keyframes
+                        0..NNNNNN (poses.txt format) known after keyframe NNNNNN, applied then;
+                        the map stays equal to mapping with the final poses (sequence folders;
+                        prints `corrections N reposed_keyframes N median_ms X max_ms X`)
 k-NN model (--model knn): the map point cloud is the union of the keyframes (clouds with an `id`
 property: ORB-SLAM map points, each joins once; without ids every point is a new map point);
 s_p = mean distance of p to its k nearest map points; the valid s_p (< s-limit) form N(mu, sigma).
@@ -186,8 +191,8 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
 inline int run_map(const std::vector<std::string>& argv) {
   const Args args(argv,
                   with_map_outputs({"--input", "--res", "--model", "--max-range", "--crop",
-                                    "--out-voxels", "--voxels", "--threads", "--k", "--w",
-                                    "--p-upper", "--p-w", "--p-free", "--s-limit"}),
+                                    "--out-voxels", "--voxels", "--threads", "--corrections", "--k",
+                                    "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"}),
                   with_map_output_flags({"--discretize"}));
   if (args.help()) {
     std::fputs(map_help().c_str(), stdout);
@@ -225,9 +230,11 @@ inline int run_map(const std::vector<std::string>& argv) {
   if (model == "octomap") {
     for (const char* knn_only : {"--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"})
       if (args.has(knn_only)) throw UsageError(std::string(knn_only) + " needs --model knn");
+    if (args.has("--corrections")) return run_map_corrections(args, opt, OctoMapModel{});
     return run_map_with(args, opt, OctoMapModel{});
   }
   if (opt.discretize) throw UsageError("--discretize applies to --model octomap only");
+  if (args.has("--corrections")) return run_map_corrections(args, opt, KnnModel(knn_params(args)));
   return run_map_with(args, opt, KnnModel(knn_params(args)));
 }
 

@@ -47,26 +47,11 @@ struct BrickBox {
   }
 };
 
-/// The bricks that rays from `origin` to `world` can touch, for keys of type Key at `resolution`.
+namespace detail {
+// The brick box of the world-coordinate extent [lo, hi], one voxel of margin, clipped to the keys.
 template <class Key>
-BrickBox reach_of(const Point3d& origin, const std::vector<Point3d>& world, double resolution,
-                  double max_range) {
-  double lo[3] = {origin.x, origin.y, origin.z}, hi[3] = {origin.x, origin.y, origin.z};
-  const double o[3] = {origin.x, origin.y, origin.z};
-  bool any = false;
-  for (const Point3d& p : world) {
-    const double c[3] = {p.x, p.y, p.z};
-    if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || !std::isfinite(c[2])) continue;
-    any = true;
-    for (int a = 0; a < 3; ++a) {
-      double v = c[a];
-      if (max_range > 0.0) v = std::clamp(v, o[a] - max_range, o[a] + max_range);
-      lo[a] = std::min(lo[a], v);
-      hi[a] = std::max(hi[a], v);
-    }
-  }
+BrickBox brick_box(const double lo[3], const double hi[3], double resolution) {
   BrickBox box;
-  if (!any) return box;  // no rays: the keyframe touches nothing
   const double top = static_cast<double>(2 * Key::center - 1);
   for (int a = 0; a < 3; ++a) {
     const double l = std::clamp(std::floor(lo[a] / resolution) - 1.0 + Key::center, 0.0, top);
@@ -75,6 +60,48 @@ BrickBox reach_of(const Point3d& origin, const std::vector<Point3d>& world, doub
     box.hi[a] = static_cast<std::int64_t>(h) >> kBrickBits;
   }
   return box;
+}
+}  // namespace detail
+
+/// Where one ray can reach: the ray from origin o towards p (within the max-range cube).
+struct RayReach {
+  double o[3] = {0, 0, 0};
+  double max_range = -1.0;
+
+  RayReach(const Point3d& origin, double range)
+      : o{origin.x, origin.y, origin.z}, max_range(range) {}
+  /// false for a non-finite p (such a point casts no ray); else lo/hi hold the extent.
+  bool extent(const Point3d& p, double lo[3], double hi[3]) const {
+    const double c[3] = {p.x, p.y, p.z};
+    if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || !std::isfinite(c[2])) return false;
+    for (int a = 0; a < 3; ++a) {
+      double v = c[a];
+      if (max_range > 0.0) v = std::clamp(v, o[a] - max_range, o[a] + max_range);
+      lo[a] = std::min(o[a], v);
+      hi[a] = std::max(o[a], v);
+    }
+    return true;
+  }
+};
+
+/// The bricks that rays from `origin` to `world` can touch, for keys of type Key at `resolution`.
+template <class Key>
+BrickBox reach_of(const Point3d& origin, const std::vector<Point3d>& world, double resolution,
+                  double max_range) {
+  const RayReach ray(origin, max_range);
+  double lo[3] = {origin.x, origin.y, origin.z}, hi[3] = {origin.x, origin.y, origin.z};
+  bool any = false;
+  for (const Point3d& p : world) {
+    double l[3], h[3];
+    if (!ray.extent(p, l, h)) continue;
+    any = true;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], l[a]);
+      hi[a] = std::max(hi[a], h[a]);
+    }
+  }
+  if (!any) return BrickBox{};  // no rays: the keyframe touches nothing
+  return detail::brick_box<Key>(lo, hi, resolution);
 }
 
 /// One stored keyframe.

@@ -32,6 +32,7 @@
 //
 // Thread safety: one writer; const queries are safe from many threads while no operation runs.
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <unordered_map>
@@ -132,19 +133,32 @@ class LiveMapper {
     }
     last_ = LiveUpdate{};
     std::vector<BrickBox> region;
+    std::vector<std::size_t> moved;
+    std::vector<char> seen(store_.size(), 0);
     for (const auto& [id, pose] : poses) {
-      keyframe_type& kf = store_[store_.position(id)];
+      const std::size_t i = store_.position(id);
+      keyframe_type& kf = store_[i];
       if (kf.pose == pose) continue;
-      ++last_.changed;
-      region.push_back(kf.reach);
-      kf.pose = pose;
-      if constexpr (!uses_map_cloud) {  // the k-NN model rebuilds: no boxes needed
-        to_world(kf);
-        kf.reach = reach();
-        region.push_back(kf.reach);
+      if (!seen[i]) {
+        seen[i] = 1;
+        moved.push_back(i);
+        region.push_back(kf.reach);  // where it was
       }
+      kf.pose = pose;
     }
-    if (last_.changed) update(region);
+    last_.changed = moved.size();
+    if (moved.empty()) return;
+    // The k-NN model rebuilds; so does a re-pose of every keyframe (a loop closure): no boxes.
+    if (uses_map_cloud || moved.size() == store_.size()) {
+      rebuild();
+      return;
+    }
+    for (const std::size_t i : moved) {  // where it is now
+      to_world(store_[i]);
+      store_[i].reach = reach();
+      region.push_back(store_[i].reach);
+    }
+    replay(region);
   }
 
   /// Removes the keyframes named; unknown ids: std::invalid_argument with nothing changed.
@@ -171,6 +185,7 @@ class LiveMapper {
     auto fresh = std::make_unique<mapper_type>(resolution_, model_, options_);
     for (std::size_t i = 0; i < store_.size(); ++i) {
       to_world(store_[i]);
+      if constexpr (!uses_map_cloud) store_[i].reach = reach();
       insert(*fresh, store_[i]);
     }
     mapper_ = std::move(fresh);
@@ -225,9 +240,31 @@ class LiveMapper {
       rebuild();
       return;
     }
+    BrickBox all = region.front();  // the region's bounding box, a quick first test
+    for (const BrickBox& r : region)
+      for (int a = 0; a < 3; ++a) {
+        all.lo[a] = std::min(all.lo[a], r.lo[a]);
+        all.hi[a] = std::max(all.hi[a], r.hi[a]);
+      }
     mapper_type scratch(resolution_, model_, options_);
     for (const std::size_t i : candidates) {
       to_world(store_[i]);
+      // Only rays that can reach the region: the others change none of its voxels (one update
+      // per voxel per scan, decided by the rays and end points in that voxel alone).
+      const RayReach ray(origin_, options_.max_range);
+      std::size_t kept = 0;
+      for (const Point3d& p : world_) {
+        double lo[3], hi[3];
+        if (!ray.extent(p, lo, hi)) continue;
+        const BrickBox b = detail::brick_box<Key>(lo, hi, resolution_);
+        if (!b.intersects(all)) continue;
+        for (const BrickBox& r : region)
+          if (b.intersects(r)) {
+            world_[kept++] = p;
+            break;
+          }
+      }
+      world_.resize(kept);
       insert(scratch, store_[i]);
     }
     last_.replayed = candidates.size();

@@ -226,3 +226,31 @@ TEST_CASE("map.accessor_matches_map_updates") {
   CHECK(a.empty());
   CHECK(a.num_bricks() == 0);
 }
+
+TEST_CASE("map.copy_brick_from_makes_a_brick_equal") {
+  using Layout = knnocc::BrickLayout<OcKey>;
+  OccupancyMap<OcKey> a(0.1), b(0.1);
+  const OcKey k1(32768, 32768, 32768), k2(32769, 32770, 32771), far(40000, 32768, 32768);
+  a.update(k1, 0.85f);
+  a.update(far, -0.4f);
+  b.update(k2, -0.4f);
+  b.update(far, 0.85f);
+  const std::uint64_t brick = Layout::brick_of(k1);
+  REQUIRE(Layout::brick_of(k2) == brick);
+  a.copy_brick_from(b, brick);  // a's brick now holds b's voxels only
+  CHECK_FALSE(a.is_known(k1));
+  CHECK(a.logodds(k2) == b.logodds(k2));
+  CHECK(a.logodds(far) == -0.4f);  // other bricks untouched
+  CHECK(a.num_voxels() == 2);
+  const OccupancyMap<OcKey> empty(0.1);
+  a.copy_brick_from(empty, brick);  // absent in the source: unknown here
+  CHECK_FALSE(a.is_known(k2));
+  CHECK(a.num_voxels() == 1);
+  b.compact();  // a uniform brick (no value array) copies too
+  a.copy_brick_from(b, brick);
+  CHECK(a.logodds(k2) == b.logodds(k2));
+  CHECK(a.num_voxels() == 2);
+  std::size_t seen = 0;
+  a.for_each_voxel([&](const OcKey&, float) { ++seen; });
+  CHECK(seen == a.num_voxels());
+}

@@ -23,6 +23,7 @@
 #include <knnocc/sim/tree_scene.hpp>
 
 #include "args.hpp"
+#include "loop_demo.hpp"
 #include "map_command.hpp"
 #include "map_picture.hpp"
 #include "room_demo.hpp"
@@ -34,6 +35,7 @@ inline const char* demo_help() {
   return R"(usage: knnocc demo [--seeds N] [--first-seed S] [--res R] [--crop M] [--out DIR]
                    [k-NN model flags of `knnocc map`: --k --w --p-upper --p-w --p-free --s-limit]
        knnocc demo --scene room      (the LiDAR room demo, see knnocc demo --scene room --help)
+       knnocc demo --scene loop      (mapping under SLAM corrections, see --scene loop --help)
 
 The paper's experiment (section 4) on the simulated tree scene (`knnocc sim`): for each seed the
 same keyframes (points within --crop 4 m of the camera) are mapped at --res 0.1 m with the OctoMap
@@ -129,7 +131,9 @@ inline int run_demo(const std::vector<std::string>& argv) {
   const auto at = std::find(argv.begin(), argv.end(), "--scene");
   if (at != argv.end() && at + 1 != argv.end()) {
     if (at[1] == "room") return run_room_demo(argv);
-    if (at[1] != "tree") throw UsageError("--scene must be tree or room, got '" + at[1] + "'");
+    if (at[1] == "loop") return run_loop_demo(argv);
+    if (at[1] != "tree")
+      throw UsageError("--scene must be tree or room (or loop), got '" + at[1] + "'");
   }
   const Args args(argv,
                   {"--scene", "--seeds", "--first-seed", "--res", "--crop", "--out", "--k", "--w",

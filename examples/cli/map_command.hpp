@@ -16,6 +16,7 @@
 #include <knnocc/sensor/knn_model.hpp>
 
 #include "args.hpp"
+#include "live_corrections.hpp"
 #include "map_outputs.hpp"
 #include "progress.hpp"
 #include "view_frame.hpp"
@@ -63,6 +64,10 @@ options:
 )") + map_outputs_help() +
          R"(  -j, --threads N       threads that walk the rays of each cloud (default 1); the map is the
                         same for every N
+  --corrections DIR     SLAM pose corrections: DIR/after_NNNNNN.txt, the poses of keyframes
+                        0..NNNNNN (poses.txt format) known after keyframe NNNNNN, applied then;
+                        the map stays equal to mapping with the final poses (sequence folders;
+                        prints `corrections N reposed_keyframes N median_ms X max_ms X`)
 k-NN model (--model knn): the map point cloud is the union of the keyframes (clouds with an `id`
 property: ORB-SLAM map points, each joins once; without ids every point is a new map point);
 s_p = mean distance of p to its k nearest map points; the valid s_p (< s-limit) form N(mu, sigma).
@@ -237,12 +242,12 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
 }
 
 inline int run_map(const std::vector<std::string>& argv) {
-  const Args args(
-      argv,
-      with_map_outputs({"--input", "--res", "--model", "--max-range", "--crop", "--out-voxels",
-                        "--voxels", "--threads", "--k", "--w", "--p-upper", "--p-w", "--p-free",
-                        "--s-limit", "--init-map", "--save-every", "--first", "--count"}),
-      with_map_output_flags({"--discretize"}));
+  const Args args(argv,
+                  with_map_outputs({"--input", "--res", "--model", "--max-range", "--crop",
+                                    "--out-voxels", "--voxels", "--threads", "--k", "--w",
+                                    "--p-upper", "--p-w", "--p-free", "--s-limit", "--corrections",
+                                    "--init-map", "--save-every", "--first", "--count"}),
+                  with_map_output_flags({"--discretize"}));
   if (args.help()) {
     std::fputs(map_help().c_str(), stdout);
     return 0;
@@ -299,12 +304,21 @@ inline int run_map(const std::vector<std::string>& argv) {
     throw UsageError("--save-every needs --out-bt or --out-ot (the files it writes)");
   opt.save_every = static_cast<std::size_t>(every);
 
+  if (args.has("--corrections"))
+    for (const char* whole_run_only : {"--init-map", "--first", "--count", "--save-every"})
+      if (args.has(whole_run_only))
+        throw UsageError(std::string("--corrections maps the whole sequence: it cannot be "
+                                     "combined with ") +
+                         whole_run_only);
+
   if (model == "octomap") {
     for (const char* knn_only : {"--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"})
       if (args.has(knn_only)) throw UsageError(std::string(knn_only) + " needs --model knn");
+    if (args.has("--corrections")) return run_map_corrections(args, opt, OctoMapModel{});
     return run_map_with(args, opt, OctoMapModel{});
   }
   if (opt.discretize) throw UsageError("--discretize applies to --model octomap only");
+  if (args.has("--corrections")) return run_map_corrections(args, opt, KnnModel(knn_params(args)));
   return run_map_with(args, opt, KnnModel(knn_params(args)));
 }
 

@@ -8,6 +8,7 @@
 
 #include <knnocc/eval/reference.hpp>
 #include <knnocc/io/sequence.hpp>
+#include <knnocc/sim/drift.hpp>
 #include <knnocc/sim/tree_scene.hpp>
 
 #include "args.hpp"
@@ -15,7 +16,7 @@
 namespace knnocc::cli {
 
 inline const char* sim_help() {
-  return R"(usage: knnocc sim --out DIR [--seed S] [--keyframes N] [--outliers F]
+  return R"(usage: knnocc sim --out DIR [--seed S] [--keyframes N] [--outliers F] [--drift DEG]
 
 Simulates the paper's experiment (section 4.1): a stereo camera (f 700 px, baseline 0.12 m,
 disparity noise 0.5 px) circles a potted tree at 3.5 m; foliage = ellipsoid, pot = cuboid, ground
@@ -29,6 +30,12 @@ options:
   --seed S          random seed (default 1); the same scene for a seed with this build
   --keyframes N     keyframes around the circle (default 60)
   --outliers F      fraction of wrong stereo matches per keyframe (default 0.08, in [0, 1))
+  --drift DEG       odometry drift: DIR/poses.txt holds tracking estimates whose heading drifts
+                    DEG degrees per keyframe (plus jitter); DIR/corrections/after_NNNNNN.txt the
+                    SLAM corrections (local bundle adjustment every 10 keyframes, the loop
+                    closure after the last: true poses), for `knnocc map --corrections`;
+                    DIR/truth/ the same keyframes at their true poses. Prints one more line:
+                    drift DEG corrections N max_offset_m X (the largest uncorrected error)
 )";
 }
 
@@ -46,7 +53,7 @@ inline sim::TreeSceneParams sim_params(const Args& args) {
 }
 
 inline int run_sim(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--out", "--seed", "--keyframes", "--outliers"}, {});
+  const Args args(argv, {"--out", "--seed", "--keyframes", "--outliers", "--drift"}, {});
   if (args.help()) {
     std::fputs(sim_help(), stdout);
     return 0;
@@ -67,8 +74,28 @@ inline int run_sim(const std::vector<std::string>& argv) {
   }
   std::sort(ids.begin(), ids.end());
   const auto distinct = static_cast<std::size_t>(std::unique(ids.begin(), ids.end()) - ids.begin());
+  const double drift = args.number("--drift", 0.0);
+  if (args.has("--drift") && !(drift >= 0.0 && drift <= 10.0))
+    throw UsageError("--drift must be in [0, 10] degrees per keyframe");
+  const std::filesystem::path dir(out);
+  if (args.has("--drift")) {
+    sim::DriftParams dp;
+    dp.heading_drift = drift * M_PI / 180.0;
+    dp.seed = scene.params().seed;
+    const sim::DriftedRun run = sim::drift_run(poses, dp);
+    io::write_sequence((dir / "truth").string(), poses, clouds);
+    std::filesystem::create_directories(dir / "corrections");
+    for (const auto& [after, snapshot] : run.snapshots) {
+      char name[32];
+      std::snprintf(name, sizeof name, "after_%06zu.txt", after);
+      io::write_tum_poses((dir / "corrections" / name).string(), snapshot);
+    }
+    std::printf("drift %g corrections %zu max_offset_m %.3f\n", drift, run.snapshots.size(),
+                run.max_offset);
+    poses = run.tracked;
+  }
   io::write_sequence(out, poses, clouds);
-  eval::write_reference((std::filesystem::path(out) / "reference.txt").string(), scene.reference());
+  eval::write_reference((dir / "reference.txt").string(), scene.reference());
   std::printf("keyframes %zu points %zu outliers %zu map_points %zu\n", keyframes.size(), points,
               outliers, distinct);
   return 0;

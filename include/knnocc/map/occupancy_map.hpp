@@ -393,6 +393,36 @@ class OccupancyMap {
     return added;
   }
   void add_known(std::size_t voxels) { known_count_ += voxels; }
+
+  /// Makes brick `coord` hold exactly what `other` holds there: its known voxels and their
+  /// values, none when `other` has no such brick (a regional replay: the brick is recomputed in
+  /// another map and copied back). Both maps must have the same resolution and key type. No
+  /// change detection is recorded.
+  void copy_brick_from(const OccupancyMap& other, std::uint64_t coord) {
+    const Brick* src = other.find_brick(coord);
+    const bool any = src && src->known.any();
+    std::uint32_t slot = index_.find(coord);
+    if (slot == detail::FlatIndex::kNone) {
+      if (!any) return;
+      slot = brick_slot(coord);
+    }
+    Brick& b = bricks_[slot];
+    known_count_ -= static_cast<std::size_t>(b.known.count());
+    if (!any) {
+      b.known.clear();
+      return;
+    }
+    b.known = src->known;
+    known_count_ += static_cast<std::size_t>(b.known.count());
+    if (src->values) {
+      if (!b.values) b.values = pool_.allocate();
+      std::copy(src->values, src->values + kBrickVoxels, b.values);
+    } else {
+      pool_.release(b.values);
+      b.values = nullptr;
+      b.uniform = src->uniform;
+    }
+  }
   const Brick* find_brick(std::uint64_t coord) const {
     const std::uint32_t slot = index_.find(coord);
     return slot == detail::FlatIndex::kNone ? nullptr : &bricks_[slot];

@@ -30,6 +30,7 @@
 
 #include "args.hpp"
 #include "map_outputs.hpp"
+#include "view_frame.hpp"
 
 namespace knnocc::cli {
 
@@ -103,8 +104,10 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
       opt.res, model, MapperOptions{opt.max_range, opt.discretize, opt.threads, {}});
   std::size_t points = 0, reposed = 0;
   std::vector<double> correction_ms;
+  UpEstimator up_estimate;
   for (std::size_t i = 0; i < source.size(); ++i) {
     io::Scan scan = source.load(i);
+    up_estimate.add(scan.pose, scan.cloud.points);
     std::vector<Point3f>& pts = scan.cloud.points;
     std::vector<std::uint64_t>& ids = scan.cloud.ids;
     if (crop > 0.0) {  // --crop: in the sensor frame, as the from-scratch path
@@ -136,13 +139,15 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
   }
   const auto& map = live.map();
+  std::vector<std::string> written;
   if (!out_voxels.empty()) {
     const io::VoxelSelection sel = which == "all"        ? io::VoxelSelection::all
                                    : which == "occupied" ? io::VoxelSelection::occupied
                                                          : io::VoxelSelection::free;
     io::write_voxel_list(out_voxels, io::voxel_records(map, sel));
+    written.push_back(out_voxels);
   }
-  write_map_outputs(map, args);
+  write_map_outputs(map, args, up_axis(args, up_estimate.result()), model_title(model), written);
   if constexpr (LiveMapper<Model>::uses_map_cloud) {
     const auto& tr = live.tracker();
     std::printf("knn k %zu map_points %zu valid %zu mu %.6f sigma %.6f\n", tr.params().k, tr.size(),
@@ -158,6 +163,7 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("clouds %zu points %zu occupied %zu free %zu seconds %.3f\n", source.size(), points,
               counts.occupied, counts.free, seconds);
+  print_written(written);
   return 0;
 }
 

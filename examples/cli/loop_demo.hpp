@@ -126,7 +126,8 @@ bool run_model(const char* name, const Model& model, const std::vector<sim::SimK
     if (!out.empty()) {
       const std::string base =
           (std::filesystem::path(out) / (std::string(name) + "_" + label)).string();
-      write_map_png(base + ".png", *map);
+      write_map_png(base + ".png", *map, UpAxis{},
+                    std::string(name) + " model, " + label + " poses");
       io::write_bt(base + ".bt", *map);
     }
   }

@@ -94,17 +94,6 @@ struct MapOptions {
   std::size_t first = 0, count = static_cast<std::size_t>(-1), save_every = 0;
 };
 
-inline const char* model_title(const OctoMapModel&) { return "OctoMap model"; }
-inline const char* model_title(const KnnModel&) { return "k-NN model"; }
-
-/// Prints `wrote A, B, ...` (nothing when no file was written).
-inline void print_written(const std::vector<std::string>& written) {
-  if (written.empty()) return;
-  std::string line = "wrote";
-  for (std::size_t i = 0; i < written.size(); ++i) line += (i ? ", " : " ") + written[i];
-  std::printf("%s\n", line.c_str());
-}
-
 /// The k-NN model's flags (defaults: the documented sweep's choice); UsageError when invalid.
 inline KnnModelParams knn_params(const Args& args) {
   KnnModelParams p;

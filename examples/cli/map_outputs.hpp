@@ -4,6 +4,7 @@
 // a 3D web page.
 
 #include <cctype>
+#include <cstdio>
 #include <filesystem>
 #include <set>
 #include <string>
@@ -12,6 +13,8 @@
 #include <knnocc/io/octomap_tree.hpp>
 #include <knnocc/io/voxel_export.hpp>
 #include <knnocc/map/occupancy_map.hpp>
+#include <knnocc/sensor/knn_model.hpp>
+#include <knnocc/sensor/octomap_model.hpp>
 
 #include "args.hpp"
 #include "map_picture.hpp"
@@ -70,6 +73,17 @@ inline void check_map_outputs(const Args& args) {
 }
 
 /// --up if given, else `estimated`.
+inline const char* model_title(const OctoMapModel&) { return "OctoMap model"; }
+inline const char* model_title(const KnnModel&) { return "k-NN model"; }
+
+/// Prints `wrote A, B, ...` (nothing when no file was written).
+inline void print_written(const std::vector<std::string>& written) {
+  if (written.empty()) return;
+  std::string line = "wrote";
+  for (std::size_t i = 0; i < written.size(); ++i) line += (i ? ", " : " ") + written[i];
+  std::printf("%s\n", line.c_str());
+}
+
 inline UpAxis up_axis(const Args& args, UpAxis estimated = {}) {
   return args.has("--up") ? parse_up_axis(args.str("--up")) : estimated;
 }

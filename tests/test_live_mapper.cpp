@@ -267,4 +267,14 @@ TEST_CASE("live_mapper.recent_repose_replays_only_nearby_keyframes") {
   CHECK_FALSE(live.last_update().rebuilt);
   CHECK(live.last_update().replayed < 30);  // the sensor sees 3 m, keyframes are 0.35 m apart
   check_against_scratch(live, OctoMapModel{}, MapperOptions{}, 0.1);
+  // An id named twice: the last pose wins; removing an id twice removes it once.
+  const RigidPose last = perturbed(rng, live.pose(98), 1.0);
+  live.repose({{98, perturbed(rng, live.pose(98), 1.0)}, {97, live.pose(97)}, {98, last}});
+  CHECK(live.last_update().changed == 1);
+  CHECK(live.pose(98) == last);
+  check_against_scratch(live, OctoMapModel{}, MapperOptions{}, 0.1);
+  live.remove({50, 50, 97});
+  CHECK(live.last_update().changed == 2);
+  CHECK(live.size() == 98);
+  check_against_scratch(live, OctoMapModel{}, MapperOptions{}, 0.1);
 }

@@ -282,7 +282,8 @@ class TreeScene {
       // a wrong stereo match (a patch of outlier_cluster points) instead of this site
       if (uniform() < p_.outliers * depth_scale / static_cast<double>(p_.outlier_cluster)) {
         const double e = 1.1 * uniform();  // factor 0.5 + e, its error scaled by depth_scale
-        const double factor = depth_scale == 1.0 ? 0.5 + e : 1.0 + (e - 0.5) * depth_scale;
+        const double factor =
+            depth_scale == 1.0 ? 0.5 + e : std::max(0.2, 1.0 + (e - 0.5) * depth_scale);
         add_wrong_patch(kf, pc, factor, R, o);
         continue;
       }

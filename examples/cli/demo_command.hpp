@@ -155,7 +155,7 @@ inline void run_regime(const sim::Regime& regime, long first, long seeds, double
                 a.sd, b.mean, b.sd, c.mean, c.sd, d.mean, d.sd);
   };
   std::printf(
-      "Table 1, regime %s (mean ± sd over %ld seeds; the reference shell has %.0f voxels on "
+      "Table 1 (regime %s, mean ± sd over %ld seeds; the reference shell has %.0f voxels on "
       "average)\n%-14s %17s %17s %17s %17s\n",
       regime.name.c_str(), seeds, double(shell) / double(seeds), "model", "nodes in shell",
       "nodes covered", "irrelevant nodes", "free inside objs");

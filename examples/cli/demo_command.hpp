@@ -20,6 +20,8 @@
 #include <knnocc/io/voxel_list.hpp>
 #include <knnocc/mapper.hpp>
 #include <knnocc/sensor/knn_model.hpp>
+#include <knnocc/sensor/robust_model.hpp>
+#include <knnocc/sim/regimes.hpp>
 #include <knnocc/sim/tree_scene.hpp>
 
 #include "args.hpp"
@@ -32,24 +34,29 @@
 namespace knnocc::cli {
 
 inline const char* demo_help() {
-  return R"(usage: knnocc demo [--seeds N] [--first-seed S] [--res R] [--crop M] [--out DIR]
-                   [k-NN model flags of `knnocc map`: --k --w --p-upper --p-w --p-free --s-limit]
+  return R"(usage: knnocc demo [--regime NAME|all] [--seeds N] [--first-seed S] [--res R] [--crop M]
+                   [--out DIR] [k-NN model flags of `knnocc map`: --k --w --p-upper --p-w
+                   --p-free --s-limit]
        knnocc demo --scene room      (the LiDAR room demo, see knnocc demo --scene room --help)
        knnocc demo --scene loop      (mapping under SLAM corrections, see --scene loop --help)
 
 The paper's experiment (section 4) on the simulated tree scene (`knnocc sim`): for each seed the
 same keyframes (points within --crop 4 m of the camera) are mapped at --res 0.1 m with the OctoMap
-model and with the k-NN model, and each map is compared with the reference shapes (`knnocc eval`).
-Prints one row per seed and model, then Table 1 as mean and standard deviation over the seeds,
-and the k-NN model's figures relative to the OctoMap model's.
+model, the k-NN model and the robust model, and each map is compared with the reference shapes
+(`knnocc eval`), for each outlier regime (`knnocc sim --regime`): isolated (paper-like, wrong
+matches seen once), clustered (patches of 6), repeated (clustered, re-observed by the next 4
+keyframes), realistic (repeated with probability 0.75, worse with depth). Prints per regime one
+row per seed and model, Table 1 as mean and standard deviation over the seeds, and each model's
+figures relative to the OctoMap model's against the goals (irrelevant <= 10 %, shell >= 97 %).
+  --regime NAME    one regime, or all (default)
   --seeds N        how many seeds (default 5), starting at --first-seed (default 1)
   --out DIR        also write, for the first seed: the sequence folder (DIR/scene), the reference
-                   (DIR/scene/reference.txt) and both maps (<model> = octomap, knn) as OctoMap
+                   (DIR/scene/reference.txt) and both maps (<model> = octomap, knn, robust; first regime) as OctoMap
                    binary trees for octovis (DIR/<model>.bt), voxel lists (DIR/<model>.voxels),
                    occupied voxels as PLY cubes coloured by height (DIR/<model>_occupied.ply)
                    and top/side pictures (DIR/<model>.png); DIR/demo.png, one picture of
-                   OctoMap model | k-NN model | reference (same extent and colours), and
-                   DIR/demo.html, the three in 3D (knnocc view)
+                   OctoMap model | k-NN model | robust model | reference (same extent and
+                   colours), and DIR/demo.html, the four in 3D (knnocc view)
 )";
 }
 
@@ -125,47 +132,21 @@ Spread spread(const std::vector<Row>& rows, F f) {
   return s;
 }
 
-}  // namespace demo
+struct RegimeResult {
+  std::vector<Row> octo, knn, robust;
+};
 
-inline int run_demo(const std::vector<std::string>& argv) {
-  const auto at = std::find(argv.begin(), argv.end(), "--scene");
-  if (at != argv.end() && at + 1 != argv.end()) {
-    if (at[1] == "room") return run_room_demo(argv);
-    if (at[1] == "loop") return run_loop_demo(argv);
-    if (at[1] != "tree")
-      throw UsageError("--scene must be tree or room (or loop), got '" + at[1] + "'");
-  }
-  const Args args(argv,
-                  {"--scene", "--seeds", "--first-seed", "--res", "--crop", "--out", "--k", "--w",
-                   "--p-upper", "--p-w", "--p-free", "--s-limit"},
-                  {});
-  if (args.help()) {
-    std::fputs(demo_help(), stdout);
-    return 0;
-  }
-  const long seeds = args.integer("--seeds", 5), first = args.integer("--first-seed", 1);
-  if (seeds < 1 || seeds > 1000) throw UsageError("--seeds must be in [1, 1000]");
-  if (first < 0 || first > 1000000000) throw UsageError("--first-seed must be in [0, 1e9]");
-  const double res = args.number("--res", 0.1);
-  if (!(res >= 0.02 && res <= 1.0)) throw UsageError("--res must be in [0.02, 1] for the demo");
-  const double crop = args.number("--crop", 4.0);
-  if (!(crop > 0)) throw UsageError("--crop must be > 0");
-  const KnnModel knn(knn_params(args));
-  const KnnModelParams& kp = knn.params();
-  const std::string out = args.str("--out");
-
-  std::printf(
-      "knnocc demo: the paper's experiment on the simulated tree scene (stereo camera circling at "
-      "3.5 m),\n%ld seeds, %g m map, points within %g m; k-NN model k %zu w %g P_u %g P_w %g "
-      "s_limit %g\n\n",
-      seeds, res, crop, kp.k, kp.w, kp.p_upper, kp.p_w, kp.s_limit);
+// One regime over the seeds: per-seed rows, then Table 1 and the goals.
+inline void run_regime(const sim::Regime& regime, long first, long seeds, double res, double crop,
+                       const KnnModel& knn, const RobustModel& robust, const std::string& out) {
+  std::printf("regime %s\n", regime.name.c_str());
   std::printf("%-5s %-8s %8s %8s %6s %8s %8s %10s %11s %8s\n", "seed", "model", "occupied", "free",
               "shell", "in_shell", "covered", "irrelevant", "free_inside", "ms/kf");
-  const auto t0 = std::chrono::steady_clock::now();
-  std::vector<demo::Row> octo_rows, knn_rows;
+  RegimeResult rr;
   std::size_t shell = 0, points = 0, outliers = 0;
+  double seen_once = 0;
   for (long s = first; s < first + seeds; ++s) {
-    sim::TreeSceneParams sp;
+    sim::TreeSceneParams sp = regime.params;
     sp.seed = static_cast<std::uint64_t>(s);
     sim::TreeScene scene(sp);
     const auto kfs = scene.keyframes();
@@ -173,6 +154,7 @@ inline int run_demo(const std::vector<std::string>& argv) {
       points += kf.cloud.points.size();
       outliers += kf.outliers;
     }
+    seen_once += sim::seen_once_fraction(kfs, crop) / double(seeds);
     std::string dir;
     if (!out.empty() && s == first) {
       dir = out;
@@ -187,76 +169,144 @@ inline int run_demo(const std::vector<std::string>& argv) {
       eval::write_reference((std::filesystem::path(seq) / "reference.txt").string(),
                             scene.reference());
     }
-    OccupancyMap<OcKey> octo_map(res), knn_map(res);
-    const demo::Row o = demo::run_model(kfs, scene.reference(), res, crop, OctoMapModel{}, dir,
-                                        "octomap", &octo_map);
-    const demo::Row k =
-        demo::run_model(kfs, scene.reference(), res, crop, knn, dir, "knn", &knn_map);
+    OccupancyMap<OcKey> octo_map(res), knn_map(res), robust_map(res);
+    rr.octo.push_back(
+        run_model(kfs, scene.reference(), res, crop, OctoMapModel{}, dir, "octomap", &octo_map));
+    rr.knn.push_back(run_model(kfs, scene.reference(), res, crop, knn, dir, "knn", &knn_map));
+    rr.robust.push_back(
+        run_model(kfs, scene.reference(), res, crop, robust, dir, "robust", &robust_map));
     if (!dir.empty()) {
-      const OccupancyMap<OcKey> ref_map = demo::reference_map(scene.reference(), res);
-      write_comparison_png(
-          (std::filesystem::path(dir) / "demo.png").string(),
-          {{"OctoMap model", &octo_map}, {"k-NN model", &knn_map}, {"reference shapes", &ref_map}},
-          UpAxis{});
-      write_view_page(
-          (std::filesystem::path(dir) / "demo.html").string(),
-          {{"OctoMap model", &octo_map}, {"k-NN model", &knn_map}, {"reference shapes", &ref_map}},
-          UpAxis{}, ViewOptions{});
+      const OccupancyMap<OcKey> ref_map = reference_map(scene.reference(), res);
+      const std::vector<std::pair<std::string, const OccupancyMap<OcKey>*>> maps = {
+          {"OctoMap model", &octo_map},
+          {"k-NN model", &knn_map},
+          {"robust model", &robust_map},
+          {"reference shapes", &ref_map}};
+      write_comparison_png((std::filesystem::path(dir) / "demo.png").string(), maps, UpAxis{});
+      std::vector<ViewMap> views;
+      for (const auto& [title, m] : maps) views.push_back({title, m});
+      write_view_page((std::filesystem::path(dir) / "demo.html").string(), views, UpAxis{},
+                      ViewOptions{});
     }
-    for (const auto& [name, r] : {std::pair<const char*, const demo::Row&>{"octomap", o},
-                                  std::pair<const char*, const demo::Row&>{"knn", k}})
+    for (const auto& [name, r] : {std::pair<const char*, const Row&>{"octomap", rr.octo.back()},
+                                  std::pair<const char*, const Row&>{"knn", rr.knn.back()},
+                                  std::pair<const char*, const Row&>{"robust", rr.robust.back()}})
       std::printf("%-5ld %-8s %8zu %8zu %6zu %8zu %8zu %10zu %11zu %8.3f\n", s, name, r.m.occupied,
                   r.m.free, r.m.shell, r.m.in_shell, r.m.covered, r.m.irrelevant, r.m.free_inside,
                   r.median_ms);
-    octo_rows.push_back(o);
-    knn_rows.push_back(k);
-    shell += o.m.shell;
+    shell += rr.octo.back().m.shell;
   }
-
-  using demo::spread;
-  auto table_row = [&](const char* name, const std::vector<demo::Row>& rows) {
-    const auto a = spread(rows, [](const demo::Row& r) { return double(r.m.in_shell); });
-    const auto b = spread(rows, [](const demo::Row& r) { return double(r.m.covered); });
-    const auto c = spread(rows, [](const demo::Row& r) { return double(r.m.irrelevant); });
-    const auto d = spread(rows, [](const demo::Row& r) { return double(r.m.free_inside); });
+  auto table_row = [&](const char* name, const std::vector<Row>& rows) {
+    const auto a = spread(rows, [](const Row& r) { return double(r.m.in_shell); });
+    const auto b = spread(rows, [](const Row& r) { return double(r.m.covered); });
+    const auto c = spread(rows, [](const Row& r) { return double(r.m.irrelevant); });
+    const auto d = spread(rows, [](const Row& r) { return double(r.m.free_inside); });
     std::printf("%-14s %9.1f ± %-5.1f %9.1f ± %-5.1f %9.1f ± %-5.1f %9.1f ± %-5.1f\n", name, a.mean,
                 a.sd, b.mean, b.sd, c.mean, c.sd, d.mean, d.sd);
   };
   std::printf(
-      "\nTable 1 (mean ± sd over %ld seeds; the reference shell has %.0f voxels on average)\n"
-      "%-14s %17s %17s %17s %17s\n",
-      seeds, double(shell) / double(seeds), "model", "nodes in shell", "nodes covered",
-      "irrelevant nodes", "free inside objs");
-  table_row("OctoMap model", octo_rows);
-  table_row("k-NN model", knn_rows);
-
-  auto total = [](const std::vector<demo::Row>& rows, auto f) {
+      "Table 1 (regime %s, mean ± sd over %ld seeds; the reference shell has %.0f voxels on "
+      "average)\n%-14s %17s %17s %17s %17s\n",
+      regime.name.c_str(), seeds, double(shell) / double(seeds), "model", "nodes in shell",
+      "nodes covered", "irrelevant nodes", "free inside objs");
+  table_row("OctoMap model", rr.octo);
+  table_row("k-NN model", rr.knn);
+  table_row("robust model", rr.robust);
+  auto total = [](const std::vector<Row>& rows, auto f) {
     double t = 0;
     for (const auto& r : rows) t += f(r);
     return t;
   };
-  const double irr_o = total(octo_rows, [](const demo::Row& r) { return double(r.m.irrelevant); });
-  const double irr_k = total(knn_rows, [](const demo::Row& r) { return double(r.m.irrelevant); });
-  const double sh_o = total(octo_rows, [](const demo::Row& r) { return double(r.m.in_shell); });
-  const double sh_k = total(knn_rows, [](const demo::Row& r) { return double(r.m.in_shell); });
-  // Ratios of sums; without OctoMap-model nodes to compare with, a goal cannot be judged.
-  const double irr_pct = irr_o > 0 ? 100.0 * irr_k / irr_o : 0.0;
-  const double shell_pct = sh_o > 0 ? 100.0 * sh_k / sh_o : 0.0;
-  const char* none = "n/a: the OctoMap model has none";
-  const char* irr_goal = irr_o == 0 ? none : irr_pct <= 10.0 ? "met" : "NOT met";
-  const char* shell_goal = sh_o == 0 ? none : shell_pct >= 97.0 ? "met" : "NOT met";
+  auto irr = [](const Row& r) { return double(r.m.irrelevant); };
+  auto sh = [](const Row& r) { return double(r.m.in_shell); };
+  const double irr_o = total(rr.octo, irr), sh_o = total(rr.octo, sh);
+  for (const auto& [name, rows] :
+       {std::pair<const char*, const std::vector<Row>&>{"k-NN", rr.knn},
+        std::pair<const char*, const std::vector<Row>&>{"robust", rr.robust}}) {
+    // Ratios of sums; without OctoMap-model nodes to compare with, a goal cannot be judged.
+    const double irr_pct = irr_o > 0 ? 100.0 * total(rows, irr) / irr_o : 0.0;
+    const double shell_pct = sh_o > 0 ? 100.0 * total(rows, sh) / sh_o : 0.0;
+    const char* none = "n/a: the OctoMap model has none";
+    std::printf(
+        "%s / OctoMap model: irrelevant nodes %.1f %% (goal <= 10 %%: %s), nodes in shell %.1f %% "
+        "(goal >= 97 %%: %s)\n",
+        name, irr_pct,
+        irr_o == 0         ? none
+        : irr_pct <= 10.0  ? "met"
+        : irr_pct <= 100.0 ? "NOT met"
+                           : "NOT met, worse than OctoMap",
+        shell_pct,
+        sh_o == 0           ? none
+        : shell_pct >= 97.0 ? "met"
+                            : "NOT met");
+  }
+  std::printf(
+      "%zu keyframe points, %zu of them wrong matches; %.1f %% of the distinct map points seen by "
+      "one keyframe (real stereo set: 6.6 %%)\n\n",
+      points, outliers, 100.0 * seen_once);
+}
+
+}  // namespace demo
+
+inline int run_demo(const std::vector<std::string>& argv) {
+  const auto at = std::find(argv.begin(), argv.end(), "--scene");
+  if (at != argv.end() && at + 1 != argv.end()) {
+    if (at[1] == "room") return run_room_demo(argv);
+    if (at[1] == "loop") return run_loop_demo(argv);
+    if (at[1] != "tree")
+      throw UsageError("--scene must be tree or room (or loop), got '" + at[1] + "'");
+  }
+  const Args args(argv,
+                  {"--scene", "--regime", "--seeds", "--first-seed", "--res", "--crop", "--out",
+                   "--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"},
+                  {});
+  if (args.help()) {
+    std::fputs(demo_help(), stdout);
+    return 0;
+  }
+  const long seeds = args.integer("--seeds", 5), first = args.integer("--first-seed", 1);
+  if (seeds < 1 || seeds > 1000) throw UsageError("--seeds must be in [1, 1000]");
+  if (first < 0 || first > 1000000000) throw UsageError("--first-seed must be in [0, 1e9]");
+  const double res = args.number("--res", 0.1);
+  if (!(res >= 0.02 && res <= 1.0)) throw UsageError("--res must be in [0.02, 1] for the demo");
+  const double crop = args.number("--crop", 4.0);
+  if (!(crop > 0)) throw UsageError("--crop must be > 0");
+  const KnnModel knn(knn_params(args));
+  const KnnModelParams& kp = knn.params();
+  RobustModelParams rp;
+  rp.knn = kp;
+  const RobustModel robust(rp);
+  const std::string out = args.str("--out");
+  const std::string which = args.str("--regime", "all");
+  std::vector<sim::Regime> regimes;
+  if (which == "all") {
+    regimes = sim::named_regimes();
+  } else {
+    sim::Regime r;
+    if (!sim::find_regime(which, r))
+      throw UsageError("--regime must be isolated, clustered, repeated, realistic or all, got '" +
+                       which + "'");
+    regimes.push_back(r);
+  }
+
+  std::printf(
+      "knnocc demo: the paper's experiment on the simulated tree scene (stereo camera circling at "
+      "3.5 m),\n%ld seeds, %g m map, points within %g m; k-NN model k %zu w %g P_u %g P_w %g "
+      "s_limit %g; robust model min_views %u\n\n",
+      seeds, res, crop, kp.k, kp.w, kp.p_upper, kp.p_w, kp.s_limit, rp.min_views);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < regimes.size(); ++i)
+    demo::run_regime(regimes[i], first, seeds, res, crop, knn, robust, i == 0 ? out : "");
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf(
-      "\nk-NN model / OctoMap model over all seeds: irrelevant nodes %.1f %% (goal <= 10 %%: %s), "
-      "nodes in shell %.1f %% (goal >= 97 %%: %s)\n"
-      "(paper, real data: irrelevant 4 / 33 = 12.1 %%, nodes in shell 387 / 399 = 97.0 %%)\n"
-      "%zu keyframe points, %zu of them wrong stereo matches; %.2f s in all\n",
-      irr_pct, irr_goal, shell_pct, shell_goal, points, outliers, seconds);
+      "(paper, real data: k-NN irrelevant 4 / 33 = 12.1 %%, nodes in shell 387 / 399 = 97.0 %%)\n"
+      "%.2f s in all\n",
+      seconds);
   if (!out.empty())
     std::printf(
-        "wrote %s/demo.png, %s/demo.html, %s/{octomap,knn}{.bt,.voxels,_occupied.ply,.png} and "
-        "%s/scene/\n",
+        "wrote %s/demo.png, %s/demo.html, %s/{octomap,knn,robust}{.bt,.voxels,_occupied.ply,.png} "
+        "and %s/scene/\n",
         out.c_str(), out.c_str(), out.c_str(), out.c_str());
   return 0;
 }

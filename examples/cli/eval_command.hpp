@@ -3,13 +3,16 @@
 
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <knnocc/eval/metrics.hpp>
+#include <knnocc/eval/multiview.hpp>
 #include <knnocc/eval/reference.hpp>
 #include <knnocc/io/error.hpp>
 #include <knnocc/io/octomap_tree.hpp>
+#include <knnocc/io/sequence.hpp>
 #include <knnocc/io/voxel_list.hpp>
 #include <knnocc/map/occupancy_map.hpp>
 
@@ -20,6 +23,8 @@ namespace knnocc::cli {
 
 inline const char* eval_help() {
   return R"(usage: knnocc eval --map FILE --reference FILE [--res R] [--inflate M] [--ground-band M]
+       knnocc eval --ids SEQ [--map FILE [--against FILE]] [--crop M] [--res R] [--min-views N]
+                   [--far M]
 
 Compares a map (an OctoMap .bt/.ot file, or a voxel list from `knnocc map --out-voxels`: x y z
 logodds per finest voxel, which needs --res; occupied = logodds >= 0) with reference shapes (`reference.txt` from `knnocc sim`: ground,
@@ -34,6 +39,19 @@ ellipsoid and cuboid lines) and prints the paper's Table 1 metrics on one line:
   evaluated    occupied voxels above the ground band; precision = 1 - irrelevant / evaluated
   shell_recall in_shell / shell
   free_inside  free voxels entirely inside a shape (space wrongly carved)
+
+Without ground truth (--ids SEQ: a sequence folder whose clouds carry map-point ids, e.g. ORB-SLAM
+keyframes; --crop M keeps the points within M of their camera, as `knnocc map --crop`): prints
+  map_points N seen_once F multiview_points N median_views V
+(seen_once: fraction of the distinct map points one keyframe alone observes; multiview: seen by
+>= --min-views keyframes, default 3) and, with --map (a map of that sequence), the proxies
+  occupied N isolated N multiview N reference_kept N lost N free_multiview N far N
+  isolated        occupied voxels without an occupied voxel among their 26 neighbours
+  multiview       voxels holding a multi-view map point
+  reference_kept  of those, occupied in the --against map (e.g. `--model octomap`'s; else 0)
+  lost            of those, not occupied in --map
+  free_multiview  multi-view voxels that are free in --map
+  far             occupied voxels farther than --far (0.3 m) from every multi-view voxel
 )";
 }
 
@@ -57,12 +75,73 @@ inline OccupancyMap<OcKey> read_voxel_map(const std::string& path, double res) {
   return map;
 }
 
+// A map file (tree, or voxel list at --res).
+inline OccupancyMap<OcKey> read_map(const Args& args, const std::string& path) {
+  const std::string ext = lower_extension(path);
+  const bool tree = ext == ".bt" || ext == ".ot";
+  if (!tree && !args.has("--res"))
+    throw UsageError("--res is required for a voxel list (the map's voxel size)");
+  const double res = args.number("--res", 0.0);
+  if (args.has("--res") && !(res >= 1e-4))
+    throw UsageError("--res must be >= 0.0001, got " + args.str("--res"));
+  OccupancyMap<OcKey> map = tree ? io::read_octree(path) : read_voxel_map(path, res);
+  if (tree && args.has("--res") && map.grid().resolution() != res)
+    throw io::Error(path, "the tree's resolution is " + std::to_string(map.grid().resolution()) +
+                              ", not --res " + args.str("--res"));
+  return map;
+}
+
+// knnocc eval --ids: quality without ground truth (eval/multiview.hpp).
+inline int run_eval_ids(const Args& args) {
+  const std::string seq_path = args.str("--ids");
+  const double crop = args.number("--crop", -1.0);
+  if (args.has("--crop") && !(crop > 0)) throw UsageError("--crop must be > 0");
+  eval::MultiviewOptions opt;
+  const long views = args.integer("--min-views", opt.min_views);
+  if (views < 1 || views > 1000) throw UsageError("--min-views must be in [1, 1000]");
+  opt.min_views = static_cast<std::uint32_t>(views);
+  opt.far = args.number("--far", opt.far);
+  if (!(opt.far >= 0)) throw UsageError("--far must be >= 0");
+  const io::Sequence seq = io::Sequence::open(seq_path);
+  eval::MapPointViews mpv;
+  std::vector<Point3d> world;
+  std::vector<std::uint64_t> ids;
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    const io::Cloud cloud = seq.load_cloud(i);
+    if (cloud.ids.empty())
+      throw io::Error(seq_path, "cloud " + std::to_string(i) + " has no map-point ids");
+    io::keyframe_to_world(seq.pose(i), cloud, crop, world, ids);
+    mpv.add_keyframe(world, ids);
+  }
+  std::printf("map_points %zu seen_once %.4f multiview_points %zu median_views %g\n", mpv.size(),
+              mpv.seen_once_fraction(), mpv.count_at_least(opt.min_views), mpv.median_views());
+  if (!args.has("--map")) return 0;
+  const OccupancyMap<OcKey> map = read_map(args, args.str("--map"));
+  std::optional<OccupancyMap<OcKey>> against;
+  if (args.has("--against")) {
+    against.emplace(read_map(args, args.str("--against")));
+    if (against->grid().resolution() != map.grid().resolution())
+      throw io::Error(args.str("--against"), "its resolution differs from --map's");
+  }
+  const eval::MultiviewMetrics m =
+      eval::evaluate_multiview(map, mpv, against ? &*against : nullptr, opt);
+  std::printf(
+      "occupied %zu isolated %zu multiview %zu reference_kept %zu lost %zu free_multiview %zu "
+      "far %zu\n",
+      m.occupied, m.isolated, m.multiview, m.reference_kept, m.lost, m.free_multiview, m.far);
+  return 0;
+}
+
 inline int run_eval(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--map", "--reference", "--res", "--inflate", "--ground-band"}, {});
+  const Args args(argv,
+                  {"--map", "--reference", "--res", "--inflate", "--ground-band", "--ids",
+                   "--against", "--crop", "--min-views", "--far"},
+                  {});
   if (args.help()) {
     std::fputs(eval_help(), stdout);
     return 0;
   }
+  if (args.has("--ids")) return run_eval_ids(args);
   const std::string map_path = args.required("--map");
   const std::string ref_path = args.required("--reference");
   eval::MetricOptions opt;

@@ -14,6 +14,7 @@
 #include <knnocc/io/voxel_list.hpp>
 #include <knnocc/mapper.hpp>
 #include <knnocc/sensor/knn_model.hpp>
+#include <knnocc/sensor/robust_model.hpp>
 
 #include "args.hpp"
 #include "live_corrections.hpp"
@@ -41,9 +42,12 @@ input (-i, --input PATH):
                         .xyz/.dat/.txt (x y z per line); sensor at the origin
 options:
   -r, --res R           voxel edge in metres (required, > 0)
-  -m, --model octomap|knn   inverse sensor model (default octomap: hit 0.7, miss 0.4,
+  -m, --model octomap|knn|robust  inverse sensor model (default octomap: hit 0.7, miss 0.4,
                         clamping 0.1192..0.971, OctoMap's insertPointCloud semantics;
-                        knn: the paper's k-NN model, eq 13-15, see below)
+                        knn: the paper's k-NN model, eq 13-15, see below; robust: see below)
+                        Which model for which sensor: sparse visual-SLAM keyframes with map-point
+                        ids -> robust; dense depth cameras / LiDAR -> octomap (knn removes far,
+                        sparser surfaces of dense clouds; robust without ids is octomap's model)
   --max-range M         points farther than M from the sensor only free space up to M and
                         mark nothing occupied (OctoMap's maxrange); < 0: no limit (default)
   --crop M              drop points farther than M from their sensor before anything else
@@ -82,6 +86,12 @@ before the summary: knn k K map_points N valid N mu X sigma X rays R of E median
   --p-free P            free-ray probability (default 0.4, OctoMap's miss; in (0, 0.5))
   --s-limit X           valid map points have s_p < X (default: no limit)
   (--discretize does not apply to the k-NN model)
+robust model (--model robust, sensor/robust_model.hpp): an endpoint adds evidence only once its
+map point has been observed by --min-views keyframes (default 3; that keyframe also adds the
+deferred evidence), eq 13 floored at P_w (a confirmed point is never pushed towards free), one
+keyframe adds the mean of its endpoints in a voxel; without map-point ids it is OctoMap's model.
+Takes the k-NN flags above. Prints the same knn line.
+  --min-views N         keyframes that confirm a map point (default 3, in [1, 1000])
 exit status: 0 success, 2 bad input (one line on stderr naming the file and the problem).
 )";
 }
@@ -214,6 +224,14 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
 
   if constexpr (Mapper<Model>::uses_map_cloud) {
     const auto& tr = mapper.tracker();
+    // Dense input (depth camera, LiDAR): the paper's s-rating removes far, sparser surfaces.
+    if constexpr (!Mapper<Model>::rates_context)
+      if (clouds > 0 && tr.N() > 0 && (tr.mu() < 0.5 * opt.res || total.points / clouds > 20000))
+        std::fprintf(stderr,
+                     "knnocc map: %s: warning: dense input (mean k-NN distance %.3g m at --res %g, "
+                     "%zu points per cloud): the k-NN model removes far, sparser surfaces of "
+                     "dense clouds; --model octomap (or robust) keeps them\n",
+                     opt.input.c_str(), tr.mu(), opt.res, total.points / clouds);
     std::sort(keyframe_ms.begin(), keyframe_ms.end());
     const double median = keyframe_ms.empty() ? 0.0 : keyframe_ms[keyframe_ms.size() / 2];
     std::printf(
@@ -231,12 +249,13 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
 }
 
 inline int run_map(const std::vector<std::string>& argv) {
-  const Args args(argv,
-                  with_map_outputs({"--input", "--res", "--model", "--max-range", "--crop",
-                                    "--out-voxels", "--voxels", "--threads", "--k", "--w",
-                                    "--p-upper", "--p-w", "--p-free", "--s-limit", "--corrections",
-                                    "--init-map", "--save-every", "--first", "--count"}),
-                  with_map_output_flags({"--discretize"}));
+  const Args args(
+      argv,
+      with_map_outputs({"--input",      "--res",        "--model",   "--max-range", "--crop",
+                        "--out-voxels", "--voxels",     "--threads", "--k",         "--w",
+                        "--p-upper",    "--p-w",        "--p-free",  "--s-limit",   "--corrections",
+                        "--init-map",   "--save-every", "--first",   "--count",     "--min-views"}),
+      with_map_output_flags({"--discretize"}));
   if (args.help()) {
     std::fputs(map_help().c_str(), stdout);
     return 0;
@@ -251,8 +270,8 @@ inline int run_map(const std::vector<std::string>& argv) {
   // of skipping nearly every point.
   if (res < 1e-4) throw UsageError("--res " + args.str("--res") + " is too small (minimum 0.0001)");
   const std::string model = args.str("--model", "octomap");
-  if (model != "octomap" && model != "knn")
-    throw UsageError("--model must be octomap or knn, got '" + model + "'");
+  if (model != "octomap" && model != "knn" && model != "robust")
+    throw UsageError("--model must be octomap, knn or robust, got '" + model + "'");
   MapOptions opt;
   opt.input = input;
   opt.max_range = args.number("--max-range", -1.0);
@@ -303,10 +322,25 @@ inline int run_map(const std::vector<std::string>& argv) {
   if (model == "octomap") {
     for (const char* knn_only : {"--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"})
       if (args.has(knn_only)) throw UsageError(std::string(knn_only) + " needs --model knn");
+    if (args.has("--min-views")) throw UsageError("--min-views needs --model robust");
     if (args.has("--corrections")) return run_map_corrections(args, opt, OctoMapModel{});
     return run_map_with(args, opt, OctoMapModel{});
   }
   if (opt.discretize) throw UsageError("--discretize applies to --model octomap only");
+  if (model == "robust") {
+    if (args.has("--corrections"))
+      throw UsageError(
+          "--corrections needs --model octomap or knn (the live mapper does not "
+          "take the robust model)");
+    RobustModelParams rp;
+    rp.knn = knn_params(args);
+    const long views = args.integer("--min-views", static_cast<long>(rp.min_views));
+    if (views < 1 || views > 1000)
+      throw UsageError("--min-views must be in [1, 1000], got " + args.str("--min-views"));
+    rp.min_views = static_cast<std::uint32_t>(views);
+    return run_map_with(args, opt, RobustModel(rp));
+  }
+  if (args.has("--min-views")) throw UsageError("--min-views needs --model robust");
   if (args.has("--corrections")) return run_map_corrections(args, opt, KnnModel(knn_params(args)));
   return run_map_with(args, opt, KnnModel(knn_params(args)));
 }

@@ -15,6 +15,7 @@
 #include <knnocc/map/occupancy_map.hpp>
 #include <knnocc/sensor/knn_model.hpp>
 #include <knnocc/sensor/octomap_model.hpp>
+#include <knnocc/sensor/robust_model.hpp>
 
 #include "args.hpp"
 #include "map_picture.hpp"
@@ -75,6 +76,7 @@ inline void check_map_outputs(const Args& args) {
 /// --up if given, else `estimated`.
 inline const char* model_title(const OctoMapModel&) { return "OctoMap model"; }
 inline const char* model_title(const KnnModel&) { return "k-NN model"; }
+inline const char* model_title(const RobustModel&) { return "robust model"; }
 
 /// Prints `wrote A, B, ...` (nothing when no file was written).
 inline void print_written(const std::vector<std::string>& written) {

@@ -9,6 +9,7 @@
 #include <knnocc/eval/reference.hpp>
 #include <knnocc/io/sequence.hpp>
 #include <knnocc/sim/drift.hpp>
+#include <knnocc/sim/regimes.hpp>
 #include <knnocc/sim/tree_scene.hpp>
 
 #include "args.hpp"
@@ -17,6 +18,7 @@ namespace knnocc::cli {
 
 inline const char* sim_help() {
   return R"(usage: knnocc sim --out DIR [--seed S] [--keyframes N] [--outliers F] [--drift DEG]
+                  [--regime NAME] [--cluster N] [--repeat N] [--repeat-prob P] [--depth-gain G]
 
 Simulates the paper's experiment (section 4.1): a stereo camera (f 700 px, baseline 0.12 m,
 disparity noise 0.5 px) circles a potted tree at 3.5 m; foliage = ellipsoid, pot = cuboid, ground
@@ -25,7 +27,9 @@ range), a fraction of wrong stereo matches. Writes
   DIR/poses.txt, DIR/clouds/NNNNNN.ply   a sequence folder (camera frame, `id` property), for
                                          `knnocc map --input DIR --crop 4 --res 0.1 ...`
   DIR/reference.txt                      the true shapes, for `knnocc eval`
-and prints: keyframes N points N outliers N map_points N
+and prints: keyframes N points N outliers N map_points N seen_once F
+(seen_once: fraction of the distinct map points within 4 m that one keyframe alone observes;
+../shared/data/orbslam2_stereo_keyframes: 0.066, see `knnocc eval --ids`)
 options:
   --seed S          random seed (default 1); the same scene for a seed with this build
   --keyframes N     keyframes around the circle (default 60)
@@ -36,11 +40,24 @@ options:
                     closure after the last: true poses), for `knnocc map --corrections`;
                     DIR/truth/ the same keyframes at their true poses. Prints one more line:
                     drift DEG corrections N max_offset_m X (the largest uncorrected error)
+  --regime NAME     start from a named outlier regime: isolated (the default scene), clustered,
+                    repeated, realistic (see `knnocc demo --help`); the flags below override it
+  --cluster N       each wrong match a patch of N features within 3 cm sharing its depth error
+  --repeat N        a patch is re-observed (same ids) by up to N following keyframes
+  --repeat-prob P   probability of each re-observation (default 1)
+  --depth-gain G    outlier rate and depth error grow as (depth / 3.5 m)^G (default 0)
 )";
 }
 
 inline sim::TreeSceneParams sim_params(const Args& args) {
   sim::TreeSceneParams p;
+  if (args.has("--regime")) {
+    sim::Regime r;
+    if (!sim::find_regime(args.str("--regime"), r))
+      throw UsageError("--regime must be isolated, clustered, repeated or realistic, got '" +
+                       args.str("--regime") + "'");
+    p = r.params;
+  }
   const long seed = args.integer("--seed", 1);
   if (seed < 0) throw UsageError("--seed must be >= 0");
   p.seed = static_cast<std::uint64_t>(seed);
@@ -49,11 +66,26 @@ inline sim::TreeSceneParams sim_params(const Args& args) {
   p.keyframes = static_cast<std::size_t>(n);
   p.outliers = args.number("--outliers", p.outliers);
   if (!(p.outliers >= 0 && p.outliers < 1)) throw UsageError("--outliers must be in [0, 1)");
+  const long cluster = args.integer("--cluster", static_cast<long>(p.outlier_cluster));
+  if (cluster < 1 || cluster > 100) throw UsageError("--cluster must be in [1, 100]");
+  p.outlier_cluster = static_cast<std::size_t>(cluster);
+  const long repeat = args.integer("--repeat", static_cast<long>(p.outlier_repeat));
+  if (repeat < 0 || repeat > 1000) throw UsageError("--repeat must be in [0, 1000]");
+  p.outlier_repeat = static_cast<std::size_t>(repeat);
+  p.repeat_prob = args.number("--repeat-prob", p.repeat_prob);
+  if (!(p.repeat_prob >= 0 && p.repeat_prob <= 1))
+    throw UsageError("--repeat-prob must be in [0, 1]");
+  p.outlier_depth_gain = args.number("--depth-gain", p.outlier_depth_gain);
+  if (!(p.outlier_depth_gain >= 0 && p.outlier_depth_gain <= 10))
+    throw UsageError("--depth-gain must be in [0, 10]");
   return p;
 }
 
 inline int run_sim(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--out", "--seed", "--keyframes", "--outliers", "--drift"}, {});
+  const Args args(argv,
+                  {"--out", "--seed", "--keyframes", "--outliers", "--drift", "--regime",
+                   "--cluster", "--repeat", "--repeat-prob", "--depth-gain"},
+                  {});
   if (args.help()) {
     std::fputs(sim_help(), stdout);
     return 0;
@@ -96,8 +128,9 @@ inline int run_sim(const std::vector<std::string>& argv) {
   }
   io::write_sequence(out, poses, clouds);
   eval::write_reference((dir / "reference.txt").string(), scene.reference());
-  std::printf("keyframes %zu points %zu outliers %zu map_points %zu\n", keyframes.size(), points,
-              outliers, distinct);
+  std::printf("keyframes %zu points %zu outliers %zu map_points %zu seen_once %.4f\n",
+              keyframes.size(), points, outliers, distinct,
+              sim::seen_once_fraction(keyframes, 4.0));
   return 0;
 }
 

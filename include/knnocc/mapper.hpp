@@ -12,6 +12,12 @@
 //   Integrator  applies one scan's updates to the map (insertion/scan_integrator.hpp):
 //               ScanInserter (exact DDA, occupied wins, one update per voxel per scan)
 //
+// A rated model may ask for each endpoint's context instead of s alone (RobustModel: `rate(const
+// PointContext&, ...)`, sensor/point_context.hpp); only then does Mapper keep, per map-point id,
+// how many keyframes observed it, its first viewing direction, the evidence it added and the
+// free-space evidence against it (insertion/map_point_ledger.hpp), and look up the endpoint's
+// voxel before the update.
+//
 // so Mapper<OctoMapModel> and Mapper<KnnModel> differ in one type and take the same keyframes. The
 // model, the tracker and the map may be passed constructed (e.g. KnnTracker<PaperAnnulus> with its
 // own dr and s_max, or a map read from a file to continue it); examples/custom_policies.cpp
@@ -39,6 +45,7 @@
 #include <iterator>
 #include <limits>
 #include <type_traits>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -46,6 +53,7 @@
 #include "core/key.hpp"
 #include "core/point3.hpp"
 #include "core/point_traits.hpp"
+#include "insertion/map_point_ledger.hpp"
 #include "insertion/scan_inserter.hpp"
 #include "insertion/scan_integrator.hpp"
 #include "knn/change_set.hpp"
@@ -108,6 +116,8 @@ class Mapper {
   using tracker_type = Tracker;
   using integrator_type = Integrator;
   static constexpr bool uses_map_cloud = detail::uses_map_cloud<Model>::value;
+  /// The model rates endpoints from their PointContext (sensor/sensor_model.hpp).
+  static constexpr bool rates_context = detail::has_context_rate<Model>::value;
 
  private:
   // The concepts of the parts, each failing with a message that names what is missing.
@@ -158,6 +168,12 @@ class Mapper {
     return tracker_;
   }
 
+  /// What a contextual model's Mapper knows per map-point id (views, contradictions, evidence).
+  template <bool B = rates_context, std::enable_if_t<B, int> = 0>
+  const MapPointLedger<Key>& map_points() const {
+    return ledger_;
+  }
+
   /// Alg. 3 for one keyframe: `points` in the world frame (any point type), seen from `origin`;
   /// `ids` one map-point id per point, or empty (then each point is a new map point). A sequence
   /// must either always or never give ids, and a Mapper takes keyframes through this overload or
@@ -175,6 +191,7 @@ class Mapper {
     } else {
       use_mode(Mode::keyframe_union);
       if (!load(origin, points, ids, ks)) return ks;
+      ids_given_ = !ids.empty();
       // Points beyond max_range stay out of the map cloud (they still cast their truncated ray).
       cloud_.clear();
       cloud_ids_.clear();
@@ -204,6 +221,7 @@ class Mapper {
       detail::invalid_argument("insert_keyframe: one id per point expected");
     KeyframeStats ks;
     if (!load(origin, points, ids, ks)) return ks;
+    ids_given_ = true;
     ks.tracker = tracker_.apply(change);
     point_ids_.assign(world_.size(), KeyframeUnion::kNoId);
     for (std::size_t j = 0; j < world_.size(); ++j)
@@ -278,6 +296,29 @@ class Mapper {
 
   // Eq 13-15 for the loaded keyframe, then the scan (Alg. 3).
   void rate_and_insert(KeyframeStats& ks) {
+    if constexpr (rates_context) {
+      rate_in_context(ks);
+      // Endpoints that add nothing and cast no ray (deferred or rejected map points) stay out of
+      // the scan: their voxels are not touched (a 0 update would make them known, and occupied).
+      kept_world_.clear();
+      kept_ratings_.clear();
+      for (std::size_t j = 0; j < world_.size(); ++j)
+        if (ratings_[j].casts_ray || ratings_[j].logodds != 0.0f) {
+          kept_world_.push_back(world_[j]);
+          kept_ratings_.push_back(ratings_[j]);
+        }
+      ks.scan = integrator_.insert_rated(origin_, kept_world_, kept_ratings_, options_.max_range);
+      ks.scan.points = world_.size();
+      settle_in_context();
+      ++keyframe_;
+    } else {
+      rate_each(ks);
+      ks.scan = integrator_.insert_rated(origin_, world_, ratings_, options_.max_range);
+    }
+  }
+
+  // Eq 13, 14 for each endpoint from its s_{p,t}.
+  void rate_each(KeyframeStats& ks) {
     ratings_.resize(world_.size());
     const RunningNormal& dist = tracker_.distribution();
     for (std::size_t j = 0; j < world_.size(); ++j) {
@@ -293,7 +334,66 @@ class Mapper {
       ks.unrated += std::isnan(s);
       ks.rays += ratings_[j].casts_ray;
     }
-    ks.scan = integrator_.insert_rated(origin_, world_, ratings_, options_.max_range);
+  }
+
+  // A contextual model's ratings: each endpoint's PointContext (its map point's views, first
+  // viewing direction and contradictions, its voxel's endpoints in this keyframe and log-odds so
+  // far).
+  void rate_in_context(KeyframeStats& ks) {
+    const std::size_t n = world_.size();
+    ratings_.resize(n);
+    keys_.resize(n);
+    key_ok_.assign(n, 0);
+    per_voxel_.clear();
+    for (std::size_t j = 0; j < n; ++j)
+      if (point_ids_[j] != KeyframeUnion::kNoId &&
+          map_.grid().point_to_key(detail::to_point3f(world_[j]), keys_[j])) {
+        key_ok_[j] = 1;
+        ++per_voxel_[keys_[j]];
+      }
+    const RunningNormal& dist = tracker_.distribution();
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::uint64_t id = point_ids_[j];
+      if (id == KeyframeUnion::kNoId) {  // beyond max_range (or non-finite): truncated ray only
+        ratings_[j] = EndpointRating{0.0f, true};
+        continue;
+      }
+      PointContext c;
+      c.s = tracker_.contains(id) ? tracker_.s(id) : std::numeric_limits<double>::quiet_NaN();
+      const double dx = world_[j].x - origin_.x, dy = world_[j].y - origin_.y,
+                   dz = world_[j].z - origin_.z;
+      c.range = std::sqrt(dx * dx + dy * dy + dz * dz);
+      c.keyframe = keyframe_;
+      if (key_ok_[j]) {
+        c.in_voxel = per_voxel_[keys_[j]];
+        if (const auto v = map_.logodds(keys_[j])) c.voxel_logodds = *v;
+      }
+      if (ids_given_) {
+        const auto& e = ledger_.observe(id, world_[j], origin_, keyframe_, map_.grid());
+        c.views = e.views;
+        c.contradictions = e.contra;
+        c.parallax = MapPointLedger<Key>::parallax(e, world_[j], origin_);
+      }
+      ratings_[j] = model_.rate(c, dist);
+      ++ks.rated;
+      ks.unrated += std::isnan(c.s);
+      ks.rays += ratings_[j].casts_ray;
+    }
+  }
+
+  // After a contextual model's scan: the evidence each map point added, then the free-space
+  // evidence of this keyframe's rays against other map points (MapPointLedger).
+  void settle_in_context() {
+    if (!ids_given_) return;
+    for (std::size_t j = 0; j < world_.size(); ++j) {
+      if (point_ids_[j] == KeyframeUnion::kNoId || ratings_[j].logodds == 0.0f) continue;
+      if (auto* e = ledger_.find(point_ids_[j])) e->added += ratings_[j].logodds;
+    }
+    if constexpr (detail::has_rejects<Model>::value)
+      ledger_.contradict(
+          origin_, world_, ratings_, keyframe_, model_.contradiction_radius(),
+          model_.contradiction_margin(), map_,
+          [&](std::uint32_t views, std::uint32_t contra) { return model_.rejects(views, contra); });
   }
 
   MapperOptions options_;
@@ -308,6 +408,15 @@ class Mapper {
   std::vector<Point3d> world_, cloud_;
   std::vector<std::uint64_t> cloud_ids_, cloud_map_ids_, point_ids_;
   std::vector<EndpointRating> ratings_;
+  // Contextual model only (rate_in_context).
+  bool ids_given_ = false;
+  std::size_t keyframe_ = 0;
+  MapPointLedger<Key> ledger_;
+  std::vector<Point3d> kept_world_;
+  std::vector<EndpointRating> kept_ratings_;
+  std::vector<Key> keys_;
+  std::vector<unsigned char> key_ok_;
+  std::unordered_map<Key, std::uint32_t, KeyHash> per_voxel_;
 };
 
 }  // namespace knnocc

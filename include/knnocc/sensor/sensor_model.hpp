@@ -14,6 +14,12 @@
 //                                    over its endpoints, eq 15) and whether it casts a free ray
 //                                    (eq 14), from the endpoint's mean k-NN distance s (NaN when
 //                                    it has none) and the distribution of the map cloud's s
+//     or, instead of that, the contextual form (RobustModel)
+//       EndpointRating rate(const PointContext& point, const RunningNormal& distribution) const;
+//                                    the same from the endpoint's context
+//                                    (sensor/point_context.hpp: s, how many keyframes observed its
+//                                    map point, its voxel's log-odds so far, ...), which Mapper
+//                                    gathers only for it,
 //     and, so that Mapper can keep the map cloud's statistics without being told how:
 //       using tracker_type = ...;    the tracker Mapper keeps by default (knn/tracker_concept.hpp)
 //       TrackerParams tracker_params() const;   optional: how that tracker is constructed
@@ -25,6 +31,7 @@
 
 #include "../stats/welford.hpp"
 #include "endpoint_rating.hpp"
+#include "point_context.hpp"
 
 namespace knnocc {
 namespace detail {
@@ -57,6 +64,28 @@ struct has_rate<
                                                   0.0, std::declval<const RunningNormal&>())),
                                               EndpointRating>>> : std::true_type {};
 
+template <class M, class = void>
+struct has_context_rate : std::false_type {};
+template <class M>
+struct has_context_rate<
+    M, std::enable_if_t<std::is_convertible_v<decltype(std::declval<const M&>().rate(
+                                                  std::declval<const PointContext&>(),
+                                                  std::declval<const RunningNormal&>())),
+                                              EndpointRating>>> : std::true_type {};
+
+// Optional for a contextual model: free-space evidence against map points, with
+//   bool rejects(std::uint32_t views, std::uint32_t contradictions) const;
+//   double contradiction_radius() const;  double contradiction_margin() const;
+// (insertion/map_point_ledger.hpp); a rejected point's earlier evidence is taken back.
+template <class M, class = void>
+struct has_rejects : std::false_type {};
+template <class M>
+struct has_rejects<M,
+                   std::void_t<decltype(bool(std::declval<const M&>().rejects(1u, 1u))),
+                               decltype(double(std::declval<const M&>().contradiction_radius())),
+                               decltype(double(std::declval<const M&>().contradiction_margin()))>>
+    : std::true_type {};
+
 /// Compiles only for a type that meets the sensor-model concept; the message names what is
 /// missing.
 template <class M>
@@ -64,8 +93,9 @@ constexpr bool check_sensor_model() {
   static_assert(has_miss_logodds<M>::value,
                 "a sensor model needs `float miss_logodds() const` (sensor/sensor_model.hpp)");
   if constexpr (uses_map_cloud<M>::value) {
-    static_assert(has_rate<M>::value,
+    static_assert(has_rate<M>::value || has_context_rate<M>::value,
                   "a sensor model with uses_map_cloud = true needs `EndpointRating rate(double s, "
+                  "const RunningNormal&) const` or `EndpointRating rate(const PointContext&, "
                   "const RunningNormal&) const` (sensor/sensor_model.hpp)");
   } else {
     static_assert(has_hit_logodds<M>::value,

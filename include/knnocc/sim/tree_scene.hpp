@@ -10,7 +10,21 @@
 // stereo depth noise along the viewing ray, sigma_z = z^2 sigma_d / (f b), and `lateral_noise`
 // across it; later keyframes observe that same position under the same id (as ORB-SLAM map
 // points). A fraction `outliers` of each keyframe's observations are wrong stereo matches: new
-// map points at depth z * U(0.5, 1.6) on the viewing ray, seen by that keyframe only.
+// map points at depth z * U(0.5, 1.6) on the viewing ray. With the defaults they are isolated and
+// seen by that keyframe only (the paper-like regime); the realistic SLAM outliers are parameters:
+//   outlier_cluster   a wrong match is a patch of that many neighbouring features sharing one
+//                     disparity error (a small wrong surface, as on repetitive texture): the
+//                     points around the site within cluster_radius across the ray, all at the
+//                     same depth factor; patches come outlier_cluster times less often, so
+//                     `outliers` stays the fraction of wrong points a keyframe creates
+//   outlier_repeat    the patch is re-observed (same ids, same world positions) by up to that many
+//                     following keyframes that have it in their image (ORB-SLAM failing to cull
+//                     or fuse it), each with probability repeat_prob
+//   outlier_depth_gain the outlier rate grows as (z / radius)^gain with depth z and the depth
+//                     error |factor - 1| as well (far matches are worse)
+// With all of them at their defaults the random sequence, and so every keyframe, is the same as
+// without them. seen_once_fraction() of the keyframes says how many distinct map points one
+// keyframe alone observes (6.6 % on ../shared/data/orbslam2_stereo_keyframes, `knnocc eval --ids`).
 // Keyframe clouds are in the camera frame (x right, y down, z forward) with camera-to-world
 // poses, like ../shared/data/orbslam2_stereo_keyframes. Deterministic for a seed with a given
 // compiler and math library (own uniform and normal variates on std::mt19937_64, so no
@@ -18,6 +32,7 @@
 //
 // Thread safety: a TreeScene is one generator (next() advances it); use one per thread.
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -51,7 +66,12 @@ struct TreeSceneParams {
   double foliage_density = 150;  ///< feature sites per m^2
   double pot_density = 100;
   double ground_density = 12;
-  double ground_radius = 6.0;  ///< textured ground around the tree (m)
+  double ground_radius = 6.0;       ///< textured ground around the tree (m)
+  std::size_t outlier_cluster = 1;  ///< points per wrong match (a patch sharing its error)
+  double cluster_radius = 0.03;     ///< the patch's extent across the viewing ray (m)
+  std::size_t outlier_repeat = 0;   ///< following keyframes that may re-observe a patch
+  double repeat_prob = 1.0;         ///< probability of each re-observation
+  double outlier_depth_gain = 0.0;  ///< rate and depth error grow as (z / radius)^gain
 
   void validate() const {
     if (keyframes < 1 || keyframes > 100000)
@@ -71,6 +91,13 @@ struct TreeSceneParams {
     if (!in(foliage_density, 0, 1e4) || !in(pot_density, 0, 1e4) || !in(ground_density, 0, 1e4))
       detail::invalid_argument("densities must be in [0, 1e4] sites per m^2");
     if (!in(ground_radius, 0, 100)) detail::invalid_argument("ground_radius must be in [0, 100] m");
+    if (outlier_cluster < 1 || outlier_cluster > 100)
+      detail::invalid_argument("outlier_cluster must be in [1, 100]");
+    if (!in(cluster_radius, 0, 1)) detail::invalid_argument("cluster_radius must be in [0, 1] m");
+    if (outlier_repeat > 1000) detail::invalid_argument("outlier_repeat must be in [0, 1000]");
+    if (!in(repeat_prob, 0, 1)) detail::invalid_argument("repeat_prob must be in [0, 1]");
+    if (!in(outlier_depth_gain, 0, 10))
+      detail::invalid_argument("outlier_depth_gain must be in [0, 10]");
   }
 };
 
@@ -110,6 +137,12 @@ class TreeScene {
  private:
   struct Site {
     Eigen::Vector3d p, n;  // position and outward normal
+  };
+  struct Patch {  // a wrong patch that later keyframes may observe again
+    std::vector<Eigen::Vector3d> world;
+    std::vector<std::uint64_t> ids;
+    std::size_t left = 0;  // re-observations still possible
+    bool fresh = true;     // made by the keyframe being built
   };
 
   double uniform() { return (rng_() >> 11) * 0x1.0p-53; }  // [0, 1)
@@ -244,17 +277,72 @@ class TreeScene {
         cam += Eigen::Vector3d(normal(), normal(), 0.0) * p_.lateral_noise;
         mp = R * cam + o;
       }
-      if (uniform() < p_.outliers) {  // a wrong stereo match instead of this site
-        const Eigen::Vector3d wrong = pc * (0.5 + 1.1 * uniform());
-        kf.cloud.points.push_back(to_f(wrong));
-        kf.cloud.ids.push_back(kOutlierIdBase + next_outlier_++);
-        ++kf.outliers;
+      const double depth_scale =
+          p_.outlier_depth_gain > 0 ? std::pow(pc.z() / p_.radius, p_.outlier_depth_gain) : 1.0;
+      // a wrong stereo match (a patch of outlier_cluster points) instead of this site
+      if (uniform() < p_.outliers * depth_scale / static_cast<double>(p_.outlier_cluster)) {
+        const double e = 1.1 * uniform();  // factor 0.5 + e, its error scaled by depth_scale
+        const double factor =
+            depth_scale == 1.0 ? 0.5 + e : std::max(0.2, 1.0 + (e - 0.5) * depth_scale);
+        add_wrong_patch(kf, pc, factor, R, o);
         continue;
       }
       kf.cloud.points.push_back(to_f(R.transpose() * (mp - o)));
       kf.cloud.ids.push_back(s);
     }
+    reobserve_patches(kf, R, o, cx, cy);
     return kf;
+  }
+
+  // A wrong match at depth factor `factor` on the ray to pc (camera frame), with the rest of its
+  // patch: the same factor for points around pc across the ray.
+  void add_wrong_patch(SimKeyframe& kf, const Eigen::Vector3d& pc, double factor,
+                       const Eigen::Matrix3d& R, const Eigen::Vector3d& o) {
+    Patch patch;
+    for (std::size_t m = 0; m < p_.outlier_cluster; ++m) {
+      Eigen::Vector3d q = pc;
+      if (m > 0) q += Eigen::Vector3d(normal(), normal(), 0.0) * (p_.cluster_radius / 2);
+      const Eigen::Vector3d wrong = q * factor;
+      const std::uint64_t id = kOutlierIdBase + next_outlier_++;
+      kf.cloud.points.push_back(to_f(wrong));
+      kf.cloud.ids.push_back(id);
+      ++kf.outliers;
+      if (p_.outlier_repeat > 0) {
+        patch.world.push_back(R * wrong + o);
+        patch.ids.push_back(id);
+      }
+    }
+    if (p_.outlier_repeat > 0) {
+      patch.left = p_.outlier_repeat;
+      patches_.push_back(std::move(patch));
+    }
+  }
+
+  // Earlier keyframes' wrong patches that this keyframe observes again (same ids and positions):
+  // the points in its image, in front of it, each patch with probability repeat_prob.
+  void reobserve_patches(SimKeyframe& kf, const Eigen::Matrix3d& R, const Eigen::Vector3d& o,
+                         double cx, double cy) {
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < patches_.size(); ++i) {
+      Patch& patch = patches_[i];
+      if (patch.fresh) {  // made by this keyframe
+        patch.fresh = false;
+      } else {
+        --patch.left;
+        if (uniform() < p_.repeat_prob)
+          for (std::size_t m = 0; m < patch.ids.size(); ++m) {
+            const Eigen::Vector3d pc = R.transpose() * (patch.world[m] - o);
+            if (pc.z() < 0.3) continue;
+            const double u = p_.focal * pc.x() / pc.z() + cx, v = p_.focal * pc.y() / pc.z() + cy;
+            if (u < 0 || u >= p_.width || v < 0 || v >= p_.height_px) continue;
+            kf.cloud.points.push_back(to_f(pc));
+            kf.cloud.ids.push_back(patch.ids[m]);
+            ++kf.outliers;
+          }
+      }
+      if (patch.left > 0) patches_[kept++] = std::move(patch);
+    }
+    patches_.resize(kept);
   }
 
   static Point3f to_f(const Eigen::Vector3d& v) {
@@ -271,6 +359,7 @@ class TreeScene {
   eval::Reference ref_;
   std::vector<Site> sites_;
   std::vector<Eigen::Vector3d> map_points_;  // NaN until first observed
+  std::vector<Patch> patches_;               // wrong patches still re-observable
   std::uint64_t next_outlier_ = 0;
   std::size_t count_ = 0;  // keyframes made so far
 };
@@ -292,6 +381,32 @@ std::vector<double> map_keyframes(MapperT& mapper, const std::vector<SimKeyframe
         std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - a).count());
   }
   return us;
+}
+
+/// The fraction of the distinct map points (ids) within `crop` of their camera (<= 0: all) that
+/// one keyframe alone observes.
+inline double seen_once_fraction(const std::vector<SimKeyframe>& keyframes, double crop) {
+  std::vector<std::uint64_t> ids;
+  for (const SimKeyframe& kf : keyframes) {
+    const std::size_t start = ids.size();
+    for (std::size_t j = 0; j < kf.cloud.points.size(); ++j) {
+      const Point3f& p = kf.cloud.points[j];
+      if (crop <= 0 || std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= crop)
+        ids.push_back(kf.cloud.ids[j]);
+    }
+    std::sort(ids.begin() + static_cast<std::ptrdiff_t>(start), ids.end());  // once per keyframe
+    ids.erase(std::unique(ids.begin() + static_cast<std::ptrdiff_t>(start), ids.end()), ids.end());
+  }
+  std::sort(ids.begin(), ids.end());
+  std::size_t distinct = 0, once = 0;
+  for (std::size_t i = 0; i < ids.size();) {
+    std::size_t j = i;
+    while (j < ids.size() && ids[j] == ids[i]) ++j;
+    ++distinct;
+    once += j - i == 1;
+    i = j;
+  }
+  return distinct ? double(once) / double(distinct) : 0.0;
 }
 
 }  // namespace knnocc::sim

@@ -1,0 +1,146 @@
+#pragma once
+// MapPointLedger: what Mapper remembers per map-point id for a contextual sensor model
+// (sensor/sensor_model.hpp, RobustModel): how many keyframes observed the point, its first
+// viewing direction, the occupied log-odds it has added to its voxel, and how many other
+// keyframes' rays contradict it (free-space evidence against the point).
+//
+// A ray contradicts a map point when it crosses the point's voxel, passes within `radius` of the
+// point and ends more than `margin` beyond it: the keyframe saw through where the point should
+// be. Each keyframe contradicts a point at most once, and never one it observes itself. When the
+// model rejects a point (enough contradictions), the evidence it added is taken back from its
+// voxel (re-rating earlier evidence) and it adds nothing more.
+//
+// Thread safety: one writer (its Mapper).
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "../core/key.hpp"
+#include "../core/point3.hpp"
+#include "../map/occupancy_map.hpp"
+#include "../raycast/dda.hpp"
+#include "../sensor/endpoint_rating.hpp"
+
+namespace knnocc {
+
+template <class Key>
+class MapPointLedger {
+ public:
+  struct Point {
+    Point3d position;             ///< world position at the first observation
+    Key key;                      ///< its voxel
+    bool has_key = false;         ///< inside the key range
+    std::uint32_t views = 0;      ///< keyframes that observed it
+    std::uint32_t contra = 0;     ///< keyframes whose rays contradict it
+    std::size_t last = 0;         ///< the latest keyframe that observed it
+    std::size_t last_contra = 0;  ///< the latest keyframe that contradicted it (+1; 0: none)
+    float dir[3] = {0, 0, 0};     ///< first viewing direction (unit)
+    float added = 0.0f;           ///< occupied log-odds it added to its voxel so far
+    bool rejected = false;        ///< its evidence was taken back
+  };
+
+  /// The point `id` observed by `keyframe` at `p` from `origin` (its first position is kept);
+  /// returns it with views counted once per keyframe.
+  Point& observe(std::uint64_t id, const Point3d& p, const Point3d& origin, std::size_t keyframe,
+                 const Grid<Key>& grid) {
+    auto [it, fresh] = points_.try_emplace(id);
+    Point& e = it->second;
+    if (fresh) {
+      e.position = p;
+      const double dx = p.x - origin.x, dy = p.y - origin.y, dz = p.z - origin.z;
+      const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
+      if (r > 0) {
+        e.dir[0] = static_cast<float>(dx / r);
+        e.dir[1] = static_cast<float>(dy / r);
+        e.dir[2] = static_cast<float>(dz / r);
+      }
+      e.has_key = grid.point_to_key(p, e.key);
+      if (e.has_key) by_voxel_[e.key].push_back(id);
+    }
+    if (fresh || e.last != keyframe) {
+      ++e.views;
+      e.last = keyframe;
+    }
+    return e;
+  }
+
+  /// Angle (rad) between the point's first viewing direction and the ray origin -> p.
+  static double parallax(const Point& e, const Point3d& p, const Point3d& origin) {
+    const double dx = p.x - origin.x, dy = p.y - origin.y, dz = p.z - origin.z;
+    const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(r > 0)) return 0.0;
+    const double c = (e.dir[0] * dx + e.dir[1] * dy + e.dir[2] * dz) / r;
+    return std::acos(c > 1.0 ? 1.0 : c < -1.0 ? -1.0 : c);
+  }
+
+  /// Counts the contradictions the rays of keyframe `keyframe` (origin -> world[j] for each j
+  /// with ratings[j].casts_ray) bring, then calls rejects(views, contradictions) for each point
+  /// they touched and takes back the evidence of the newly rejected ones from `map`. Returns the
+  /// number of points rejected.
+  template <class Rejects>
+  std::size_t contradict(const Point3d& origin, const std::vector<Point3d>& world,
+                         const std::vector<EndpointRating>& ratings, std::size_t keyframe,
+                         double radius, double margin, OccupancyMap<Key>& map, Rejects&& rejects) {
+    if (points_.empty()) return 0;
+    touched_.clear();
+    const Point3f o = detail::to_point3f(origin);
+    const double r2 = radius * radius;
+    for (std::size_t j = 0; j < world.size(); ++j) {
+      if (!ratings[j].casts_ray) continue;
+      const Point3d& e = world[j];
+      const double ux = e.x - origin.x, uy = e.y - origin.y, uz = e.z - origin.z;
+      const double len = std::sqrt(ux * ux + uy * uy + uz * uz);
+      if (!(len > margin)) continue;
+      const double f = (len - margin) / len;
+      const Point3f stop =
+          detail::to_point3f(Point3d{origin.x + ux * f, origin.y + uy * f, origin.z + uz * f});
+      for_each_ray_key(map.grid(), o, stop, [&](const Key& k) {
+        const auto cell = by_voxel_.find(k);
+        if (cell == by_voxel_.end()) return;
+        for (const std::uint64_t id : cell->second) {
+          Point& p = points_[id];
+          if (p.last == keyframe || p.last_contra == keyframe + 1 || p.rejected) continue;
+          const double px = p.position.x - origin.x, py = p.position.y - origin.y,
+                       pz = p.position.z - origin.z;
+          const double t = (px * ux + py * uy + pz * uz) / len;
+          if (!(t > 0 && t < len - margin)) continue;
+          if (px * px + py * py + pz * pz - t * t > r2) continue;
+          ++p.contra;
+          p.last_contra = keyframe + 1;
+          touched_.push_back(id);
+        }
+      });
+    }
+    std::size_t rejected = 0;
+    for (const std::uint64_t id : touched_) {
+      Point& p = points_[id];
+      if (p.rejected || !rejects(p.views, p.contra)) continue;
+      p.rejected = true;
+      ++rejected;
+      if (p.has_key && p.added != 0.0f) map.update(p.key, -p.added);
+      p.added = 0.0f;
+    }
+    return rejected;
+  }
+
+  const Point* find(std::uint64_t id) const {
+    const auto it = points_.find(id);
+    return it == points_.end() ? nullptr : &it->second;
+  }
+  Point* find(std::uint64_t id) {
+    const auto it = points_.find(id);
+    return it == points_.end() ? nullptr : &it->second;
+  }
+  std::size_t size() const { return points_.size(); }
+  const std::unordered_map<std::uint64_t, Point>& points() const { return points_; }
+
+ private:
+  std::unordered_map<std::uint64_t, Point> points_;
+  std::unordered_map<Key, std::vector<std::uint64_t>, KeyHash> by_voxel_;
+  std::vector<std::uint64_t> touched_;
+};
+
+}  // namespace knnocc

@@ -1,0 +1,126 @@
+#pragma once
+// RobustModel: an inverse sensor model for sparse visual-SLAM keyframes with realistic wrong
+// matches (clustered, repeated, worse with depth), beyond the paper's k-NN model (knn_model.hpp,
+// which it keeps for the s part). It rates each endpoint from its PointContext
+// (sensor/point_context.hpp), which Mapper gathers for it:
+//
+//   - multi-view support: an endpoint whose map point has been observed by fewer than min_views
+//     keyframes adds nothing and casts no ray yet (a wrong match is mostly seen by one keyframe);
+//   - re-rating at confirmation: the keyframe that brings a map point to min_views adds the
+//     evidence the earlier, deferred observations would have added (min_views times its own);
+//   - s: a confirmed endpoint's probability is eq 13's, but never below P_w (a point several
+//     keyframes agree on is not pushed towards free, however sparse its neighbourhood);
+//   - one keyframe's endpoints in one voxel add their mean, not their sum (eq 15 bounded: a patch
+//     of wrong matches cannot outvote the rays through it);
+//   - free-space evidence: an endpoint whose voxel already holds log-odds below free_veto (rays
+//     of other keyframes crossed it) adds no occupied evidence, unless its map point has at least
+//     veto_views views;
+//   - without map-point ids (dense sensors: depth cameras, LiDAR) there is no multi-view support:
+//     every endpoint is rated as OctoMap's model rates it (hit, ray), so dense input keeps its
+//     structure (the paper's s-rating removes far, sparser surfaces there).
+// Each part can be switched off in RobustModelParams to measure it (bench/bench_robust_model.cpp).
+//
+// Thread safety: immutable after construction; share it freely.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+
+#include "../core/config.hpp"
+#include "../core/log_odds.hpp"
+#include "../knn/tracker.hpp"
+#include "../stats/welford.hpp"
+#include "endpoint_rating.hpp"
+#include "knn_model.hpp"
+#include "point_context.hpp"
+
+namespace knnocc {
+
+struct RobustModelParams {
+  KnnModelParams knn = {};      ///< eq 13 for the s part (k, w, P_u, P_w, free probability)
+  std::uint32_t min_views = 3;  ///< keyframes that confirm a map point (1: no deferral)
+  bool rerate = true;           ///< the confirming keyframe adds the deferred evidence
+  bool use_s = true;            ///< eq 13 (floored at P_w); false: OctoMap's hit for all
+  bool bound_voxel = true;      ///< one keyframe adds the mean of its endpoints in a voxel
+  double free_veto = -std::numeric_limits<double>::infinity();           ///< see above (off)
+  std::uint32_t veto_views = std::numeric_limits<std::uint32_t>::max();  ///< immune from veto
+  double p_hit = 0.7;  ///< endpoints without map-point ids (OctoMap's hit), and use_s = false
+  /// Free-space evidence (insertion/map_point_ledger.hpp): a map point is rejected, and its
+  /// evidence taken back, once at least contra_min other keyframes' rays passed within
+  /// contra_radius of it and ended more than contra_margin beyond it, and at least contra_ratio
+  /// times its views did (contra_min 0: off).
+  std::uint32_t contra_min = 2;
+  double contra_ratio = 0.5;
+  double contra_radius = 0.05;  ///< m
+  double contra_margin = 0.3;   ///< m
+  /// Lowest probability of a confirmed endpoint (s part): P_w by default; 0.5 adds nothing
+  double p_floor = -1;  ///< < 0: P_w
+
+  void validate() const {
+    knn.validate();
+    if (min_views < 1 || min_views > 1000)
+      detail::invalid_argument("min_views must be in [1, 1000], got " + std::to_string(min_views));
+    if (!(p_hit > 0.5 && p_hit < 1.0))
+      detail::invalid_argument("hit probability must be in (0.5, 1), got " + std::to_string(p_hit));
+    if (!(p_floor < 0 || (p_floor >= 0.5 && p_floor < 1)))
+      detail::invalid_argument("p_floor must be in [0.5, 1) (or < 0: P_w)");
+    if (!(contra_ratio >= 0 && contra_ratio <= 100) ||
+        !(contra_radius >= 0 && contra_radius < 10) || !(contra_margin >= 0 && contra_margin < 100))
+      detail::invalid_argument(
+          "contradiction: ratio in [0, 100], radius in [0, 10) m, margin in "
+          "[0, 100) m");
+    if (std::isnan(free_veto) || free_veto > 0)
+      detail::invalid_argument("free_veto must be <= 0 (or -inf: off)");
+  }
+};
+
+class RobustModel {
+ public:
+  static constexpr bool uses_map_cloud = true;
+  using tracker_type = KnnTracker<>;
+
+  explicit RobustModel(RobustModelParams params = {}) : params_(params), knn_(params.knn) {
+    params_.validate();
+    hit_ = static_cast<float>(logodds(params_.p_hit));
+    floor_ = logodds(params_.p_floor < 0 ? params_.knn.p_w : params_.p_floor);
+  }
+
+  const RobustModelParams& params() const { return params_; }
+  TrackerParams tracker_params() const { return params_.knn.tracker_params(); }
+  float miss_logodds() const { return knn_.miss_logodds(); }
+
+  /// One endpoint's occupied log-odds and free ray from its context (see the header comment).
+  EndpointRating rate(const PointContext& c, const RunningNormal& dist) const {
+    if (c.views == 0)  // no map-point ids: OctoMap's model (one hit per voxel and scan)
+      return EndpointRating{c.in_voxel > 1 ? hit_ / static_cast<float>(c.in_voxel) : hit_, true};
+    if (c.views < params_.min_views || rejects(c.views, c.contradictions))
+      return EndpointRating{0.0f, false};
+    double l = hit_;
+    if (params_.use_s) {
+      const double p = knn_.probability(c.s, dist);
+      l = std::max(static_cast<double>(logodds(p)), floor_);
+    }
+    if (params_.rerate && c.views == params_.min_views) l *= params_.min_views;
+    if (c.voxel_logodds < params_.free_veto && c.views < params_.veto_views) l = 0.0;
+    if (params_.bound_voxel && c.in_voxel > 1) l /= c.in_voxel;
+    return EndpointRating{static_cast<float>(l), true};
+  }
+
+  /// Free-space evidence outweighs the point's views (see RobustModelParams::contra_min).
+  bool rejects(std::uint32_t views, std::uint32_t contradictions) const {
+    return params_.contra_min > 0 && contradictions >= params_.contra_min &&
+           contradictions >= params_.contra_ratio * views;
+  }
+  double contradiction_radius() const { return params_.contra_radius; }
+  double contradiction_margin() const { return params_.contra_margin; }
+
+ private:
+  RobustModelParams params_;
+  KnnModel knn_;
+  float hit_ = 0.0f;
+  double floor_ = 0.0;
+};
+
+}  // namespace knnocc

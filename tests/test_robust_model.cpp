@@ -1,0 +1,171 @@
+// sensor/robust_model.hpp: each rule of the rating, and Mapper<RobustModel> end to end (views
+// counted per map point, deferred evidence re-rated at confirmation, rejected points' evidence
+// taken back, dense input without ids rated as OctoMap's model rates it).
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include <knnocc/core/log_odds.hpp>
+#include <knnocc/mapper.hpp>
+#include <knnocc/sensor/knn_model.hpp>
+#include <knnocc/sensor/robust_model.hpp>
+
+using namespace knnocc;
+
+namespace {
+RunningNormal distribution(std::initializer_list<double> values) {
+  RunningNormal d;
+  for (double v : values) d.add(v);
+  return d;
+}
+}  // namespace
+
+TEST_CASE("robust model: the rating rules") {
+  const RunningNormal dist = distribution({0.1, 0.2, 0.3, 0.2, 0.15});
+  RobustModelParams p;
+  const RobustModel m(p);
+  const KnnModel knn(p.knn);
+  PointContext c;
+  c.s = 0.05;  // reliable
+  SUBCASE("no map-point ids: OctoMap's hit and a ray") {
+    c.views = 0;
+    const EndpointRating r = m.rate(c, dist);
+    CHECK(r.logodds == static_cast<float>(logodds(0.7)));
+    CHECK(r.casts_ray);
+  }
+  SUBCASE("fewer views than min_views: nothing yet, no ray") {
+    c.views = 2;
+    const EndpointRating r = m.rate(c, dist);
+    CHECK(r.logodds == 0.0f);
+    CHECK_FALSE(r.casts_ray);
+  }
+  SUBCASE("the confirming keyframe adds the deferred evidence; later ones their own") {
+    const double l = logodds(knn.probability(0.05, dist));
+    c.views = 3;
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(3 * l));
+    CHECK(m.rate(c, dist).casts_ray);
+    c.views = 4;
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(l));
+  }
+  SUBCASE("a confirmed point is never pushed towards free (floor at P_w)") {
+    c.views = 5;
+    c.s = 10.0;
+    CHECK(knn.rate(10.0, dist).logodds < 0.0f);
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(logodds(p.knn.p_w)));
+    c.s = std::numeric_limits<double>::quiet_NaN();
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(logodds(p.knn.p_w)));
+  }
+  SUBCASE("one keyframe's endpoints in a voxel add their mean") {
+    c.views = 5;
+    c.in_voxel = 4;
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(logodds(knn.probability(0.05, dist)) / 4));
+  }
+  SUBCASE("a rejected point adds nothing and casts no ray") {
+    c.views = 4;
+    c.contradictions = 2;  // >= contra_min 2 and >= 0.5 * 4
+    CHECK(m.rejects(4, 2));
+    CHECK(m.rate(c, dist).logodds == 0.0f);
+    CHECK_FALSE(m.rate(c, dist).casts_ray);
+    CHECK_FALSE(m.rejects(6, 2));  // 2 < 0.5 * 6
+    CHECK_FALSE(m.rejects(1, 1));  // < contra_min
+  }
+  SUBCASE("free_veto: a voxel with free evidence takes no occupied evidence") {
+    RobustModelParams q;
+    q.free_veto = -0.5;
+    const RobustModel v(q);
+    c.views = 4;
+    c.voxel_logodds = -0.8f;
+    CHECK(v.rate(c, dist).logodds == 0.0f);
+    c.voxel_logodds = -0.2f;
+    CHECK(v.rate(c, dist).logodds > 0.0f);
+  }
+  SUBCASE("invalid parameters are refused") {
+    RobustModelParams q;
+    q.min_views = 0;
+    CHECK_THROWS_AS(RobustModel{q}, std::invalid_argument);
+    q = {};
+    q.p_floor = 0.3;
+    CHECK_THROWS_AS(RobustModel{q}, std::invalid_argument);
+    q = {};
+    q.free_veto = 1.0;
+    CHECK_THROWS_AS(RobustModel{q}, std::invalid_argument);
+  }
+}
+
+TEST_CASE("robust model in a Mapper: deferral, confirmation, views per map point") {
+  Mapper<RobustModel> m(0.1);
+  const Point3d origin{0, 0, 0};
+  const std::vector<Point3d> pts{{2.05, 0.05, 0.05}};
+  const std::vector<std::uint64_t> ids{42};
+  OcKey k;
+  REQUIRE(m.map().grid().point_to_key(pts[0], k));
+  OcKey crossed;
+  REQUIRE(m.map().grid().coord_to_key(1.05, 0.05, 0.05, crossed));
+  m.insert_keyframe(origin, pts, ids);
+  m.insert_keyframe(origin, pts, ids);
+  CHECK_FALSE(m.map().logodds(k).has_value());        // deferred: its voxel untouched
+  CHECK_FALSE(m.map().logodds(crossed).has_value());  // no ray yet
+  CHECK(m.map_points().find(42)->views == 2);
+  const KeyframeStats ks = m.insert_keyframe(origin, pts, ids);
+  CHECK(ks.rays == 1);
+  // One point: no s (fewer than k neighbours), rated at the floor P_w, three times at once.
+  REQUIRE(m.map().logodds(k).has_value());
+  CHECK(*m.map().logodds(k) == doctest::Approx(3 * logodds(0.65)).epsilon(1e-5));
+  CHECK(*m.map().logodds(crossed) == doctest::Approx(logodds(0.4)));
+  CHECK(m.map_points().find(42)->views == 3);
+  CHECK(m.map_points().find(42)->added == doctest::Approx(3 * logodds(0.65)).epsilon(1e-5));
+}
+
+TEST_CASE("robust model in a Mapper: rays of other keyframes through a point take it back") {
+  Mapper<RobustModel> m(0.1);
+  const std::vector<Point3d> pt{{2.05, 0.05, 0.05}};
+  for (int i = 0; i < 3; ++i) m.insert_keyframe(Point3d{0, 0, 0}, pt, {7});
+  OcKey k;
+  REQUIRE(m.map().grid().point_to_key(pt[0], k));
+  REQUIRE(m.map().is_occupied(*m.map().logodds(k)));
+  // Another point seen from elsewhere: confirmed first (3 keyframes), then its rays pass
+  // through point 7 and end 2 m behind it.
+  const Point3d side{2.05, -3.0, 0.05};
+  const std::vector<Point3d> behind{{2.05, 2.0, 0.05}};
+  // (no ray while point 8 is unconfirmed: the 3rd and 4th keyframes contradict point 7)
+  for (int i = 0; i < 4; ++i) m.insert_keyframe(side, behind, {8});
+  const auto* p = m.map_points().find(7);
+  REQUIRE(p != nullptr);
+  CHECK(p->contra >= 2);
+  CHECK(p->rejected);
+  CHECK_FALSE(m.map().is_occupied(*m.map().logodds(k)));
+  // Observing it again adds nothing.
+  m.insert_keyframe(Point3d{0, 0, 0}, pt, {7});
+  CHECK_FALSE(m.map().is_occupied(*m.map().logodds(k)));
+}
+
+TEST_CASE("robust model without map-point ids maps as the OctoMap model") {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-3.0f, 3.0f);
+  Mapper<RobustModel> robust(0.1);
+  Mapper<OctoMapModel> octo(0.1);
+  for (int s = 0; s < 4; ++s) {
+    std::vector<Point3f> pts;
+    for (int i = 0; i < 500; ++i) pts.push_back({u(rng), u(rng), u(rng) * 0.3f});
+    const Point3f o{u(rng) * 0.1f, u(rng) * 0.1f, 0.0f};
+    robust.insert_keyframe(o, pts);
+    octo.insert_keyframe(o, pts);
+  }
+  std::size_t n = 0, differ = 0;
+  octo.map().for_each_voxel([&](const OcKey& k, float v) {
+    ++n;
+    const auto r = robust.map().logodds(k);
+    if (!r || std::fabs(*r - v) > 1e-5f) {
+      ++differ;
+      if (differ < 5) MESSAGE("octomap " << v << " robust " << (r ? *r : -99.0f));
+    }
+  });
+  CHECK(n > 1000);
+  CHECK(differ == 0);
+  CHECK(robust.map().count_voxels().occupied == octo.map().count_voxels().occupied);
+  CHECK(robust.map().count_voxels().free == octo.map().count_voxels().free);
+}

@@ -4,7 +4,8 @@
 // own "drawn in N ms" (from the start of navigation to the first frame finished on the GPU, the
 // page's data and three.js parsed), the browser's wall time (start-up included), what the page
 // drew (level, faces) and the goals (1e5 <= 3 s, 1e6 <= 8 s). There is no liboctomap counterpart
-// (octovis needs a display); the reference figure is plain instanced cubes, measured separately.
+// (octovis needs a display and OpenGL). Usage: bench_view_page [repeats] [max_faces] (a larger
+// face budget shows what drawing 1e6 voxels at full resolution costs).
 
 #include <cstdio>
 #include <cstdlib>
@@ -54,15 +55,19 @@ int main(int argc, char** argv) {
     return 0;
   }
   const int repeats = argc > 1 ? std::atoi(argv[1]) : 2;
+  cli::ViewOptions opt;
+  if (argc > 2) opt.max_faces = static_cast<std::size_t>(std::atol(argv[2]));
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "knnocc_bench_view";
   std::filesystem::create_directories(dir);
-  std::printf("bench_view_page: %s, window 1200x800, software WebGL (SwiftShader)\n",
-              chromium.c_str());
+  std::printf(
+      "bench_view_page: %s, window 1200x800, software WebGL (SwiftShader), face budget "
+      "%zu\n",
+      chromium.c_str(), opt.max_faces);
   for (const std::size_t n : {std::size_t{100000}, std::size_t{1000000}}) {
     const OccupancyMap<OcKey> map = rooms(n);
     const std::string page = (dir / ("rooms_" + std::to_string(n) + ".html")).string();
     const auto t0 = std::chrono::steady_clock::now();
-    const std::string html = cli::view_page_html({{"rooms", &map}}, cli::UpAxis{}, {});
+    const std::string html = cli::view_page_html({{"rooms", &map}}, cli::UpAxis{}, opt);
     io::AtomicFile out(page);
     out.write(html);
     out.commit();

@@ -30,7 +30,7 @@ any voxel in them is), and the page says so.
   --names A,B,...       the maps' names on the page (default: the file names)
   --up AXIS             up: x, y, z, -x, -y or -z (default z: map files hold no poses)
   -r, --res R           voxel edge of voxel-list inputs
-  --max-faces N         exposed faces drawn per map before coarsening (default 1500000)
+  --max-faces N         exposed faces drawn per map before coarsening (default 2500000)
 Prints `wrote FILE (N maps)`. Exit status 2 on bad input (one line naming the file).
 )";
 }

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <unordered_set>
 #include <vector>
@@ -34,7 +35,7 @@ struct ViewMap {
 };
 
 struct ViewOptions {
-  std::size_t max_faces = 1500000;  ///< exposed faces drawn per map before coarsening
+  std::size_t max_faces = 2500000;  ///< exposed faces drawn per map before coarsening
   std::size_t max_free = 300000;    ///< free cells drawn per map before coarsening
 };
 

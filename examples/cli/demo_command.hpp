@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -43,7 +44,8 @@ and the k-NN model's figures relative to the OctoMap model's.
                    (DIR/scene/reference.txt) and both maps (<model> = octomap, knn) as OctoMap
                    binary trees for octovis (DIR/<model>.bt), voxel lists (DIR/<model>.voxels),
                    occupied voxels as PLY cubes coloured by height (DIR/<model>_occupied.ply)
-                   and top/side pictures (DIR/<model>.png)
+                   and top/side pictures (DIR/<model>.png); DIR must be new or an empty
+                   folder (built aside as DIR.tmp-XXXXXX and renamed when complete)
 )";
 }
 
@@ -113,6 +115,10 @@ inline int run_demo(const std::vector<std::string>& argv) {
   const KnnModel knn(knn_params(args));
   const KnnModelParams& kp = knn.params();
   const std::string out = args.str("--out");
+  if (args.has("--out") && out.empty()) throw UsageError("--out needs a folder name, got ''");
+  // Refuses a non-empty folder before any work; the folder is built aside, renamed at the end.
+  std::unique_ptr<io::StagingDir> stage;
+  if (!out.empty()) stage = std::make_unique<io::StagingDir>(out);
 
   std::printf(
       "knnocc demo: the paper's experiment on the simulated tree scene (stereo camera circling at "
@@ -135,8 +141,8 @@ inline int run_demo(const std::vector<std::string>& argv) {
     }
     std::string dir;
     if (!out.empty() && s == first) {
-      dir = out;
-      const std::string seq = (std::filesystem::path(out) / "scene").string();
+      dir = stage->path();
+      const std::string seq = (std::filesystem::path(dir) / "scene").string();
       std::vector<io::Pose> poses;
       std::vector<const io::Cloud*> clouds;
       for (const auto& kf : kfs) {
@@ -200,6 +206,7 @@ inline int run_demo(const std::vector<std::string>& argv) {
       "(paper, real data: irrelevant 4 / 33 = 12.1 %%, nodes in shell 387 / 399 = 97.0 %%)\n"
       "%zu keyframe points, %zu of them wrong stereo matches; %.2f s in all\n",
       irr_pct, irr_goal, shell_pct, shell_goal, points, outliers, seconds);
+  if (stage) stage->commit();
   if (!out.empty())
     std::printf("wrote %s/{octomap,knn}{.bt,.voxels,_occupied.ply,.png} and %s/scene/\n",
                 out.c_str(), out.c_str());

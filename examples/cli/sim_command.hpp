@@ -11,6 +11,7 @@
 #include <knnocc/sim/tree_scene.hpp>
 
 #include "args.hpp"
+#include "output_set.hpp"
 
 namespace knnocc::cli {
 
@@ -29,6 +30,8 @@ options:
   --seed S          random seed (default 1); the same scene for a seed with this build
   --keyframes N     keyframes around the circle (default 60)
   --outliers F      fraction of wrong stereo matches per keyframe (default 0.08, in [0, 1))
+DIR must be new or an empty folder: it is written aside (DIR.tmp-XXXXXX) and renamed when
+complete, so a failed run leaves no partial folder.
 )";
 }
 
@@ -52,6 +55,7 @@ inline int run_sim(const std::vector<std::string>& argv) {
     return 0;
   }
   const std::string out = args.required("--out");
+  io::StagingDir stage(out);  // refuses a non-empty folder before any work; renamed at the end
   sim::TreeScene scene(sim_params(args));
   const auto keyframes = scene.keyframes();
   std::vector<io::Pose> poses;
@@ -67,8 +71,10 @@ inline int run_sim(const std::vector<std::string>& argv) {
   }
   std::sort(ids.begin(), ids.end());
   const auto distinct = static_cast<std::size_t>(std::unique(ids.begin(), ids.end()) - ids.begin());
-  io::write_sequence(out, poses, clouds);
-  eval::write_reference((std::filesystem::path(out) / "reference.txt").string(), scene.reference());
+  io::write_sequence(stage.path(), poses, clouds);
+  eval::write_reference((std::filesystem::path(stage.path()) / "reference.txt").string(),
+                        scene.reference());
+  stage.commit();
   std::printf("keyframes %zu points %zu outliers %zu map_points %zu\n", keyframes.size(), points,
               outliers, distinct);
   return 0;

@@ -4,9 +4,6 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
-#include <atomic>
-#include <cstdlib>
-#include <new>
 #include <random>
 #include <vector>
 
@@ -35,10 +32,11 @@ TEST_CASE("insert.no_allocation_once_warmed_up") {
     knnocc::OccupancyMap<knnocc::OcKey> map(0.1);
     knnocc::ScanInserter<knnocc::OcKey> inserter(map);
     for (const bool discretize : {false, true}) {
-      const std::size_t cold = g_allocations.load(), cold_big = knnocc::detail::big_allocations;
+      const std::size_t cold = knnocc::test::allocations();
+      const std::size_t cold_big = knnocc::detail::big_allocations;
       inserter.insert_point_cloud(knnocc::Point3f{}, scan, -1.0, discretize);  // warm-up
       if (!discretize) {  // the counters do see allocations
-        CHECK(g_allocations.load() > cold);
+        CHECK(knnocc::test::allocations() > cold);
         CHECK(knnocc::detail::big_allocations > cold_big);
       }
       std::shuffle(scan.begin(), scan.end(), rng);

@@ -18,7 +18,7 @@
 #include <knnocc/core/point3.hpp>
 #include <knnocc/io/octomap_tree.hpp>
 #include <knnocc/map/brick.hpp>
-#include <knnocc/map/value_pool.hpp>
+#include <knnocc/map/occupancy_map.hpp>
 
 #include "args.hpp"
 
@@ -160,15 +160,17 @@ inline OccupancyMap<OcKey> read_tree_checked(const std::string& path) {
   return io::read_octree(path, tree_read_options());
 }
 
-/// The least memory one brick of a map takes: its value array, its record and its index slot.
+/// The least memory one brick of a map takes: its record and its index slots (a brick that one
+/// update made uniform has no value array).
 inline constexpr std::size_t kBrickBytesAtLeast =
-    ValuePool::kArrayBytes + 32 + 2 * (sizeof(std::uint64_t) + sizeof(std::uint32_t));
+    sizeof(OccupancyMap<OcKey>::Brick) + 2 * (sizeof(std::uint64_t) + sizeof(std::uint32_t));
 
 /// A lower bound on the bricks one scan creates: the distinct bricks holding points sampled
 /// along its rays (from `origin`, one sample per brick edge, rays cut at max_range when > 0;
 /// endpoints only when `rays` is false), each of which a ray passes through. Stops counting past
-/// `enough`. When sampling every ray would take more than ~2 M samples, a subset of the rays is
-/// sampled (still a lower bound); when the samples cannot reach `enough` it returns 0 at once.
+/// `enough`. When sampling every ray would take more samples than 3 x `enough` (at most 4 M), a
+/// subset of the rays is sampled (still a lower bound: a limit far above 4 M bricks is left to
+/// the map's own memory limit); when the samples cannot reach `enough` it returns 0 at once.
 template <class P>
 std::size_t at_least_bricks(const Point3d& origin, const std::vector<P>& pts, double res,
                             double max_range, bool rays, std::size_t enough) {
@@ -193,8 +195,8 @@ std::size_t at_least_bricks(const Point3d& origin, const std::vector<P>& pts, do
   }
   if (samples <= double(enough)) return 0;  // cannot reach `enough`: nothing to refuse
   // Proving more than `enough` bricks takes more than `enough` samples: sample up to three times
-  // that (the set of seen bricks stays below `enough` entries, a few % of the memory at stake).
-  const double kMaxSamples = 3.0 * double(enough) + 1e6;
+  // that, and at most 4 M (the set of seen bricks then stays below ~100 MB).
+  const double kMaxSamples = std::min(3.0 * double(enough) + 1e6, 4e6);
   const std::size_t stride =
       samples > kMaxSamples ? static_cast<std::size_t>(std::ceil(samples / kMaxSamples)) : 1;
   knnocc::detail::FlatIndex seen;

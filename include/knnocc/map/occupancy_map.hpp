@@ -363,7 +363,7 @@ class OccupancyMap {
       std::size_t grow = index_.growth_bytes(need);
       if (bricks_.capacity() < need)
         grow += (std::max(need, 2 * bricks_.capacity()) - bricks_.capacity()) * sizeof(Brick);
-      check_growth(grow + more * ValuePool::kArrayBytes);
+      check_growth(grow);  // value arrays are checked one by one (prepare_values)
     }
     if (bricks_.capacity() < need) bricks_.reserve(std::max(need, 2 * bricks_.capacity()));
     index_.reserve(need);
@@ -394,7 +394,17 @@ class OccupancyMap {
   /// check change_detection_enabled()) and without the map's voxel count: returns the number of
   /// voxels that became known, for add_known(). Once `b` has its value array (prepare_values) it
   /// touches nothing but `b`, so different bricks may be updated from different threads at once.
+  /// A brick with no known voxel and no value array (new, unprepared) takes the update as a
+  /// uniform brick, as compact() would leave it: every voxel of `mask` gets clamp(0 + delta), and
+  /// no array is allocated (sparse rays touch a few voxels of many bricks). Such a brick must not
+  /// get a second update before prepare_values().
   std::size_t update_brick(Brick& b, const VoxelMask& mask, float delta) {
+    if (!b.values && !b.known.any()) {
+      if (!mask.any()) return 0;
+      b.uniform = clamp(0.0f + delta);
+      b.known = mask;
+      return static_cast<std::size_t>(mask.count());
+    }
     prepare_values(b);  // a compacted (or new, empty) brick: give it its value array first
     const detail::ValueUpdate u{delta, clamp(0.0f + delta), params_.clamp_min, params_.clamp_max};
 #if KNNOCC_AVX2_LANES

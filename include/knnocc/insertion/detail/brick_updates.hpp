@@ -138,7 +138,8 @@ void gather_hashed(ThreadScratches& scratch, unsigned threads, std::vector<std::
   first.clear();
 }
 
-/// Creates the missing map bricks in group order (serially: the map's value pool is serial), then
+/// Creates the missing map bricks in group order (serially: the map's value pool is serial; a new
+/// brick that only hits or only misses touch stays uniform, without a value array), then
 /// updates every touched voxel once, occupied first: hit voxels get values.hit (unless rated),
 /// miss voxels that are not hits get values.miss. Groups are updated by the team's threads in
 /// turn. Returns the voxels updated (occupied: hit updates,
@@ -150,8 +151,11 @@ UpdateCounts apply_updates(OccupancyMap<Key>& map, BrickGroups& bricks, const Sc
   for (std::size_t g = 0; g < bricks.count; ++g)
     for (BrickUpdate& u : bricks.groups[g]) {
       u.slot = map.brick_slot(u.coord);
-      map.prepare_values(map.brick_at(u.slot));
       for (std::size_t i = 0; i < u.miss.w.size(); ++i) u.miss.w[i] &= ~u.hit.w[i];  // hit wins
+      auto& brick = map.brick_at(u.slot);
+      const bool one_update = !values.rated && (!u.hit.any() || !u.miss.any());
+      if (!one_update || brick.known.any() || map.change_detection_enabled())
+        map.prepare_values(brick);
     }
   const bool hits_here = !values.rated;  // rated hits carry their own sums
   UpdateCounts total;

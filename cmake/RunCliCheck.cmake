@@ -8,6 +8,7 @@
 #   -DEXPECT_FILE=<path>     optional: must exist afterwards (removed first); a|b for several
 #   -DNO_FILE=<path>         optional: must not exist afterwards, nor <path>.tmp (removed first)
 #   -DSAME_FILES=<a>|<b>     optional: the two files must be byte for byte identical
+#   -DCLEAN_DIR=<path>       optional: a folder removed first (outputs that refuse a non-empty one)
 string(REPLACE "|" ";" _args "${ARGS}")
 string(REPLACE "|" ";" _expect_files "${EXPECT_FILE}")
 foreach(_f IN LISTS _expect_files ITEMS "${NO_FILE}")
@@ -15,6 +16,9 @@ foreach(_f IN LISTS _expect_files ITEMS "${NO_FILE}")
     file(REMOVE "${_f}" "${_f}.tmp")
   endif()
 endforeach()
+if(CLEAN_DIR)
+  file(REMOVE_RECURSE "${CLEAN_DIR}")
+endif()
 if(WRITE_FILE)
   file(WRITE "${WRITE_FILE}" "${WRITE_CONTENT}")
 endif()

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include <knnocc/insertion/scan_inserter.hpp>
 #include <knnocc/map/occupancy_map.hpp>
 
 #include "test_support.hpp"
@@ -253,4 +254,66 @@ TEST_CASE("map.copy_brick_from_makes_a_brick_equal") {
   std::size_t seen = 0;
   a.for_each_voxel([&](const OcKey&, float) { ++seen; });
   CHECK(seen == a.num_voxels());
+}
+
+// A map's memory limit: the write that would pass it is refused (MemoryLimitError) before any
+// allocation, the map stays as it was and keeps working within what it has.
+TEST_CASE("map.memory_limit_refuses_the_write_that_would_pass_it") {
+  OccupancyMap<OcKey> map(0.1);
+  const std::size_t limit = 300000;
+  map.set_memory_limit(limit);
+  CHECK(map.memory_limit() == limit);
+  std::size_t made = 0;
+  bool refused = false;
+  std::uint16_t x = 32768;
+  for (; made < 10000; ++made, x = static_cast<std::uint16_t>(x + 8)) {  // a new brick each
+    const std::size_t before = map.memory_usage(), known = map.num_voxels();
+    try {
+      map.update(OcKey(x, 32768, 32768), 0.85f);
+    } catch (const knnocc::MemoryLimitError& e) {
+      refused = true;
+      CHECK(e.limit() == limit);
+      CHECK(e.needed() > limit);
+      CHECK(std::string(e.what()).find("map memory limit of 0.3 MB") != std::string::npos);
+      CHECK(map.memory_usage() == before);  // nothing allocated
+      CHECK(map.num_voxels() == known);
+      CHECK_FALSE(map.is_known(OcKey(x, 32768, 32768)));
+      break;
+    }
+    REQUIRE(map.memory_usage() <= limit);
+  }
+  REQUIRE(refused);
+  CHECK(made > 50);  // the limit was used, not refused at once
+  // Voxels of existing bricks can still be written; earlier values are intact.
+  CHECK(map.update(OcKey(32769, 32768, 32768), 0.85f) == doctest::Approx(0.85f));
+  CHECK(*map.logodds(OcKey(32768, 32768, 32768)) == doctest::Approx(0.85f));
+  // Without a limit the same write succeeds.
+  map.set_memory_limit(0);
+  map.update(OcKey(x, 32768, 32768), 0.85f);
+  CHECK(map.is_known(OcKey(x, 32768, 32768)));
+}
+
+TEST_CASE("map.memory_limit_bounds_a_whole_scan") {
+  // 2,000 rays 50 m long in every direction: far more bricks than 1 MB holds.
+  std::vector<knnocc::Point3f> pts;
+  knnocc::test::Rng rng(5);
+  std::normal_distribution<float> n(0.f, 1.f);
+  for (int i = 0; i < 2000; ++i) {
+    float v[3] = {n(rng), n(rng), n(rng)};
+    const float r = 50.f / std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    pts.push_back({v[0] * r, v[1] * r, v[2] * r});
+  }
+  OccupancyMap<OcKey> limited(0.05);
+  limited.set_memory_limit(std::size_t{1} << 20);
+  CHECK_THROWS_AS(knnocc::insert_point_cloud(limited, knnocc::Point3f{0, 0, 0}, pts),
+                  knnocc::MemoryLimitError);
+  CHECK(limited.memory_usage() <= (std::size_t{1} << 20));
+  OccupancyMap<OcKey> unlimited(0.05);
+  knnocc::insert_point_cloud(unlimited, knnocc::Point3f{0, 0, 0}, pts);
+  CHECK(unlimited.memory_usage() > (std::size_t{1} << 20));
+  // A limit above what the scan needs changes nothing.
+  OccupancyMap<OcKey> roomy(0.05);
+  roomy.set_memory_limit(2 * unlimited.memory_usage());
+  knnocc::insert_point_cloud(roomy, knnocc::Point3f{0, 0, 0}, pts);
+  CHECK(roomy.num_voxels() == unlimited.num_voxels());
 }

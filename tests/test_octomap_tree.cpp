@@ -118,7 +118,7 @@ TEST_CASE("octomap_tree.geb079 round trip gives identical bytes") {
   const std::string out = tree_file("geb079_copy.bt");
   io::write_bt(out, map);
   CHECK(read_file(out) == original);
-  CHECK(!fs::exists(out + ".tmp"));
+  CHECK_FALSE(knnocc::test::has_temporary_beside(out));
 
   // .ot of the same map, read back: the same voxels and values.
   const std::string ot = tree_file("geb079.ot");
@@ -206,6 +206,11 @@ TEST_CASE("octomap_tree.malformed files throw io::Error naming the file") {
   expect_error("bad_id.ot", replace(good_ot, "id OcTree", "id CountingOcTree"),
                "unsupported OctoMap tree type");
   expect_error("keyword.bt", replace(good_bt, "id OcTree", "colour red"), "unknown header keyword");
+  // Headers are bounded: 200,000 comment lines (2.4 MB) are refused at 1 MiB, quickly.
+  std::string comments;
+  for (int i = 0; i < 200000; ++i) comments += "# comment\n";
+  expect_error("long_header.bt", replace(good_bt, "id OcTree", comments + "id OcTree"),
+               "OctoMap header is longer than 1 MiB");
 
   // Hand-built node streams.
   const std::string bt_head = std::string(io::detail::kBtFirstLine) + "\n";
@@ -366,3 +371,31 @@ TEST_CASE("octomap_tree.reads liboctomap's ColorOcTree and OcTreeStamped files")
   CHECK(io::read_octree(spath).num_voxels() == stamped.getNumLeafNodes());
 }
 #endif
+
+TEST_CASE("octomap_tree.memory_limit refuses a file whose leaves surely do not fit") {
+  // Two free leaves at depth 6 (2^30 voxels each): 71 bytes that expand to 2^31 voxels, within
+  // max_voxels; as compacted bricks they take 4 M brick records (hundreds of MB).
+  const std::string bytes = std::string(io::detail::kBtFirstLine) +
+                            "\nid OcTree\nsize 8\nres 0.1\ndata\n" +
+                            std::string("\x03\x00\x03\x00\x03\x00\x03\x00\x03\x00\x05\x00", 12);
+  const std::string path = tree_file("two_giant_leaves.bt");
+  write_file(path, bytes);
+  const io::OctreeInfo info = io::inspect_octree(path);
+  CHECK(info.free_voxels == (std::uint64_t{1} << 31));
+  io::OctreeReadOptions o;
+  o.memory_limit = std::size_t{64} << 20;
+  try {
+    (void)io::read_octree(path, o);
+    FAIL("no error");
+  } catch (const io::Error& e) {
+    CHECK(e.file() == path);
+    CHECK_MESSAGE(e.problem().find("voxels need at least") != std::string::npos, e.problem());
+    CHECK(e.problem().find("memory limit of 67 MB") != std::string::npos);
+  }
+  // A small map reads under a small limit, unchanged.
+  const OccupancyMap<OcKey> map = mixed_map(3);
+  const std::string small = tree_file("small_limited.bt");
+  io::write_bt(small, map);
+  o.memory_limit = 4 * map.memory_usage() + (std::size_t{1} << 20);
+  CHECK(io::encode_bt(io::read_octree(small, o)) == io::encode_bt(map));
+}

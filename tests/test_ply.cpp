@@ -50,7 +50,7 @@ TEST_CASE("io.ply binary round trip") {
       CHECK(same_bits(c.points[i].z, pts[i].z));
     }
     CHECK(fs::file_size(p) == read_text(p).find("end_header\n") + 11 + 12 * pts.size());
-    CHECK_FALSE(fs::exists(p + ".tmp"));
+    CHECK_FALSE(knnocc::test::has_temporary_beside(p));
   }
   SUBCASE("with ids") {
     std::vector<std::uint64_t> ids;
@@ -108,7 +108,7 @@ TEST_CASE("io.ply binary round trip") {
     io::write_ply(p, pts);
     io::write_ply(p, {Point3f{1, 2, 3}});
     CHECK(io::read_ply(p).points.size() == 1);
-    CHECK_FALSE(fs::exists(p + ".tmp"));
+    CHECK_FALSE(knnocc::test::has_temporary_beside(p));
   }
 }
 
@@ -350,5 +350,58 @@ TEST_CASE("io.ply malformed files throw io::Error naming the file") {
         xyz_props + "end_header\n";
     bin.append(17, '\0');
     check_ply_error(dir, "facefirst.ply", bin, "unsupported binary PLY: element 'face'");
+  }
+}
+
+// Header parsing is linear in the header's length and the header is bounded (1 MiB): crafted
+// headers with many properties or elements are parsed or refused, never slowly.
+TEST_CASE("io.ply long headers: many properties and elements parsed, past 1 MiB refused") {
+  ScratchDir dir("ply_long_header");
+  auto header_with = [](std::size_t props, std::size_t elements) {
+    std::string h = "ply\nformat ascii 1.0\n";
+    for (std::size_t e = 0; e < elements; ++e) h += "element e" + std::to_string(e) + " 0\n";
+    h += "element vertex 2\nproperty float x\nproperty float y\nproperty float z\n";
+    for (std::size_t i = 0; i < props; ++i) h += "property uchar p" + std::to_string(i) + "\n";
+    return h + "end_header\n";
+  };
+  auto values = [](std::size_t props, const char* xyz) {
+    std::string line = xyz;
+    for (std::size_t i = 0; i < props; ++i) line += " 7";
+    return line + "\n";
+  };
+  SUBCASE("30,000 extra properties") {
+    const std::string p = dir.file("props.ply");
+    write_bytes(p, header_with(30000, 0) + values(30000, "1 2 3") + values(30000, "4 5 6"));
+    const io::Cloud c = io::read_ply(p);
+    REQUIRE(c.points.size() == 2);
+    CHECK(c.points[1].x == 4.0f);
+    CHECK(c.points[1].z == 6.0f);
+  }
+  SUBCASE("30,000 empty elements before the vertices") {
+    const std::string p = dir.file("elements.ply");
+    write_bytes(p, header_with(0, 30000) + "1 2 3\n4 5 6\n");
+    const io::Cloud c = io::read_ply(p);
+    REQUIRE(c.points.size() == 2);
+    CHECK(c.points[0].y == 2.0f);
+  }
+  SUBCASE("a duplicate found at the end of a long list") {
+    const std::string p = dir.file("dup.ply");
+    std::string h = header_with(30000, 0);
+    h.insert(h.size() - 11, "property uchar p12345\n");
+    write_bytes(p, h + "1 2 3\n");
+    CHECK(error_of([&] { io::read_ply(p); }).find("duplicate property 'p12345'") !=
+          std::string::npos);
+  }
+  SUBCASE("200,000 properties (a 4.5 MB header) are refused") {
+    const std::string p = dir.file("huge.ply");
+    write_bytes(p, header_with(200000, 0) + "1 2 3\n");
+    const std::string e = error_of([&] { io::read_ply(p); });
+    CHECK(e.find("huge.ply: PLY header is longer than 1 MiB") != std::string::npos);
+  }
+  SUBCASE("one endless header line is refused") {
+    const std::string p = dir.file("line.ply");
+    write_bytes(p, "ply\nformat ascii 1.0\ncomment " + std::string(2 << 20, 'c') + "\n");
+    CHECK(error_of([&] { io::read_ply(p); }).find("header is longer than 1 MiB") !=
+          std::string::npos);
   }
 }

@@ -96,6 +96,16 @@ inline void write_file(const std::filesystem::path& path, const std::string& byt
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 }
 
+/// Whether a temporary of `target` ("<name>.tmp-XXXXXX", io::AtomicFile) is left beside it.
+inline bool has_temporary_beside(const std::filesystem::path& target) {
+  const std::string prefix = target.filename().string() + ".tmp";
+  std::filesystem::path dir = target.parent_path();
+  if (dir.empty()) dir = ".";
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().filename().string().rfind(prefix, 0) == 0) return true;
+  return false;
+}
+
 /// Appends v to s little-endian, on every host.
 template <class T>
 void append_le(std::string& s, T v) {

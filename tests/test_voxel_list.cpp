@@ -41,7 +41,7 @@ TEST_CASE("io.voxel_list is sorted and round-trips") {
       {0.5, -2.0, 9.0, 0.4f},   {0.0078125, 1e-7, -0.0, 3.5f},
   };
   io::write_voxel_list(p, v);
-  CHECK_FALSE(fs::exists(p + ".tmp"));
+  CHECK_FALSE(knnocc::test::has_temporary_beside(p));
   CHECK(read_text(p) ==
         "-0.500000 3.000000 1.000000 -2.000000\n"
         "0.007812 0.000000 -0.000000 3.500000\n"

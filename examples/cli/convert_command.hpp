@@ -21,7 +21,9 @@
 
 #include "args.hpp"
 #include "map_outputs.hpp"
+#include "output_set.hpp"
 #include "progress.hpp"
+#include "resource_limits.hpp"
 
 namespace knnocc::cli {
 
@@ -96,6 +98,7 @@ inline int run_convert(const std::vector<std::string>& argv) {
   if (args.positional().size() != 2) throw UsageError("needs IN and OUT (see --help)");
   const std::string in = args.positional()[0], out = args.positional()[1];
   const std::string in_ext = lower_extension(in), out_ext = lower_extension(out);
+  check_outputs({{"OUT", out}});
   const std::string encoding = args.str("--encoding", "binary");
   if (encoding != "ascii" && encoding != "binary" && encoding != "binary_compressed")
     throw UsageError("--encoding must be ascii, binary or binary_compressed, got '" + encoding +
@@ -127,7 +130,7 @@ inline int run_convert(const std::vector<std::string>& argv) {
   if (map_in) {
     OccupancyMap<OcKey> map = voxel_list_in
                                   ? detail::read_voxel_list_map(in, args.number("--res", 0.0))
-                                  : io::read_octree(in);
+                                  : read_tree_checked(in);
     const auto sel = [&](const char* fallback) {
       const std::string w = which.empty() ? fallback : which;
       if (args.flag("--ply-free")) return io::VoxelSelection::all;

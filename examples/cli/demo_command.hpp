@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -56,7 +57,9 @@ figures relative to the OctoMap model's against the goals (irrelevant <= 10 %, s
                    occupied voxels as PLY cubes coloured by height (DIR/<model>_occupied.ply)
                    and top/side pictures (DIR/<model>.png); DIR/demo.png, one picture of
                    OctoMap model | k-NN model | robust model | reference (same extent and
-                   colours), and DIR/demo.html, the four in 3D (knnocc view)
+                   colours), and DIR/demo.html, the four in 3D (knnocc view).
+                   DIR must be new, empty or an earlier demo's output (built aside as
+                   DIR.tmp-XXXXXX and renamed when complete)
 )";
 }
 
@@ -130,6 +133,20 @@ Spread spread(const std::vector<Row>& rows, F f) {
   for (const Row& r : rows) s.sd += (f(r) - s.mean) * (f(r) - s.mean);
   s.sd = rows.size() > 1 ? std::sqrt(s.sd / static_cast<double>(rows.size() - 1)) : 0.0;
   return s;
+}
+
+// An earlier `demo --out` folder (its picture, page and scene), which running the demo again
+// replaces; any other non-empty folder is refused.
+inline bool is_demo_output(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name != "scene" && name != "demo.png" && name != "demo.html" &&
+        name.rfind("octomap", 0) != 0 && name.rfind("knn", 0) != 0 && name.rfind("robust", 0) != 0)
+      return false;
+  }
+  return !ec && fs::is_directory(fs::path(dir) / "scene");
 }
 
 struct RegimeResult {
@@ -277,6 +294,10 @@ inline int run_demo(const std::vector<std::string>& argv) {
   rp.knn = kp;
   const RobustModel robust(rp);
   const std::string out = args.str("--out");
+  if (args.has("--out") && out.empty()) throw UsageError("--out needs a folder name, got ''");
+  // Refuses a non-empty folder before any work; the folder is built aside, renamed at the end.
+  std::unique_ptr<io::StagingDir> stage;
+  if (!out.empty()) stage = std::make_unique<io::StagingDir>(out, demo::is_demo_output);
   const std::string which = args.str("--regime", "all");
   std::vector<sim::Regime> regimes;
   if (which == "all") {
@@ -296,13 +317,15 @@ inline int run_demo(const std::vector<std::string>& argv) {
       seeds, res, crop, kp.k, kp.w, kp.p_upper, kp.p_w, kp.s_limit, rp.min_views);
   const auto t0 = std::chrono::steady_clock::now();
   for (std::size_t i = 0; i < regimes.size(); ++i)
-    demo::run_regime(regimes[i], first, seeds, res, crop, knn, robust, i == 0 ? out : "");
+    demo::run_regime(regimes[i], first, seeds, res, crop, knn, robust,
+                     i == 0 && stage ? stage->path() : "");
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf(
       "(paper, real data: k-NN irrelevant 4 / 33 = 12.1 %%, nodes in shell 387 / 399 = 97.0 %%)\n"
       "%.2f s in all\n",
       seconds);
+  if (stage) stage->commit();
   if (!out.empty())
     std::printf(
         "wrote %s/demo.png, %s/demo.html, %s/{octomap,knn,robust}{.bt,.voxels,_occupied.ply,.png} "

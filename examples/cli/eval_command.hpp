@@ -18,6 +18,7 @@
 
 #include "args.hpp"
 #include "map_outputs.hpp"  // lower_extension
+#include "resource_limits.hpp"
 
 namespace knnocc::cli {
 
@@ -158,7 +159,8 @@ inline int run_eval(const std::vector<std::string>& argv) {
     throw UsageError("--res must be >= 0.0001, got " + args.str("--res"));
 
   const eval::Reference ref = eval::read_reference(ref_path);
-  const OccupancyMap<OcKey> map = tree ? io::read_octree(map_path) : read_voxel_map(map_path, res);
+  const OccupancyMap<OcKey> map =
+      tree ? read_tree_checked(map_path) : read_voxel_map(map_path, res);
   if (tree && args.has("--res") && map.grid().resolution() != res)
     throw io::Error(map_path, "the tree's resolution is " +
                                   std::to_string(map.grid().resolution()) + ", not --res " +

@@ -16,6 +16,7 @@
 #include "args.hpp"
 #include "map_outputs.hpp"
 #include "progress.hpp"
+#include "resource_limits.hpp"
 
 namespace knnocc::cli {
 
@@ -81,6 +82,7 @@ inline int run_info(const std::vector<std::string>& argv) {
 
   if (ext == ".bt" || ext == ".ot") {
     const io::OctreeInfo t = io::inspect_octree(path);
+    check_tree_resolution(path, t.resolution);  // what map and convert accept, info accepts
     std::printf("format: OctoMap %s tree (%s), id %s\n", t.binary ? "binary" : "full",
                 t.binary ? ".bt" : ".ot", t.id.c_str());
     std::printf("resolution: %g\n", t.resolution);
@@ -102,6 +104,7 @@ inline int run_info(const std::vector<std::string>& argv) {
 
   const io::ScanSource source = io::ScanSource::open(path);
   if (std::string(source.kind()) == "point file") {
+    if (ext == ".pcd") (void)source.load(0);  // its VIEWPOINT checked as `map` checks it
     io::PcdInfo pcd;
     const io::Cloud cloud = ext == ".pcd" ? io::read_pcd(path, &pcd) : io::read_points(path);
     detail::Box box;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,8 @@
 #include "eval_command.hpp"
 #include "info_command.hpp"
 #include "map_command.hpp"
+#include "output_set.hpp"
+#include "resource_limits.hpp"
 #include "sim_command.hpp"
 #include "track_command.hpp"
 #include "view_command.hpp"
@@ -48,25 +51,47 @@ int main(int argc, char** argv) {
   }
   const std::string command = argv[1];
   const std::vector<std::string> args(argv + 2, argv + argc);
+  knnocc::io::remove_temporaries_on_signal();
+  // Allocations past the memory limit fail (std::bad_alloc, one line below) instead of the
+  // kernel killing the process; `map --memory-limit` sets its own.
+  knnocc::cli::apply_memory_limit(knnocc::cli::default_memory_limit());
   try {
-    if (command == "map") return knnocc::cli::run_map(args);
-    if (command == "demo") return knnocc::cli::run_demo(args);
-    if (command == "track") return knnocc::cli::run_track(args);
-    if (command == "sim") return knnocc::cli::run_sim(args);
-    if (command == "eval") return knnocc::cli::run_eval(args);
-    if (command == "info") return knnocc::cli::run_info(args);
-    if (command == "convert") return knnocc::cli::run_convert(args);
-    if (command == "view") return knnocc::cli::run_view(args);
-    if (command == "version" || command == "--version") {
+    int rc = 2;
+    if (command == "map") {
+      rc = knnocc::cli::run_map(args);
+    } else if (command == "demo") {
+      rc = knnocc::cli::run_demo(args);
+    } else if (command == "track") {
+      rc = knnocc::cli::run_track(args);
+    } else if (command == "sim") {
+      rc = knnocc::cli::run_sim(args);
+    } else if (command == "eval") {
+      rc = knnocc::cli::run_eval(args);
+    } else if (command == "info") {
+      rc = knnocc::cli::run_info(args);
+    } else if (command == "convert") {
+      rc = knnocc::cli::run_convert(args);
+    } else if (command == "view") {
+      rc = knnocc::cli::run_view(args);
+    } else if (command == "version" || command == "--version") {
       std::printf("knnocc %s\n", KNNOCC_VERSION_STRING);
-      return 0;
+      rc = 0;
+    } else {
+      std::fprintf(stderr, "knnocc: unknown command '%s' (see knnocc --help)\n", command.c_str());
+      return 2;
     }
-    std::fprintf(stderr, "knnocc: unknown command '%s' (see knnocc --help)\n", command.c_str());
-    return 2;
+    knnocc::cli::check_stdout();  // output lost on a full disk or /dev/full fails the command
+    return rc;
   } catch (const knnocc::cli::UsageError& e) {
     std::fprintf(stderr, "knnocc %s: %s\n", command.c_str(), e.what());
   } catch (const knnocc::io::Error& e) {
     std::fprintf(stderr, "knnocc %s: %s\n", command.c_str(), e.what());
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr,
+                 "knnocc %s: out of memory: the command needs more than the memory limit of %s "
+                 "(map --memory-limit; default 80 %% of this machine's memory)\n",
+                 command.c_str(),
+                 knnocc::cli::format_bytes(knnocc::cli::memory_limit_bytes()).c_str());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "knnocc %s: %s\n", command.c_str(), e.what());
   }

@@ -19,7 +19,9 @@
 #include "args.hpp"
 #include "live_corrections.hpp"
 #include "map_outputs.hpp"
+#include "output_set.hpp"
 #include "progress.hpp"
+#include "resource_limits.hpp"
 #include "view_frame.hpp"
 
 namespace knnocc::cli {
@@ -67,7 +69,12 @@ options:
                         killed run leaves the last whole snapshot)
 )") + map_outputs_help() +
          R"(  -j, --threads N       threads that walk the rays of each cloud (default 1); the map is the
-                        same for every N
+                        same for every N; at most the machine's hardware threads (more is capped,
+                        with a note)
+  --memory-limit SIZE   the most memory the command may take, e.g. 800M or 4G (default: 80 %
+                        of the machine's memory, or of a lower address-space or cgroup limit);
+                        the map may use 75 % of it. A scan that surely needs more is refused
+                        before it is inserted; running out later is one line too (exit 2)
   --corrections DIR     SLAM pose corrections: DIR/after_NNNNNN.txt, the poses of keyframes
                         0..NNNNNN (poses.txt format) known after keyframe NNNNNN, applied then;
                         the map stays equal to mapping with the final poses (sequence folders;
@@ -98,7 +105,7 @@ exit status: 0 success, 2 bad input (one line on stderr naming the file and the 
 
 struct MapOptions {
   std::string input, which, out_voxels, init_map;
-  double res = 0, max_range = -1, crop = -1;
+  double res = 0, max_range = -1, crop = -1, memory_limit = 0;
   bool discretize = false;
   unsigned threads = 1;
   std::size_t first = 0, count = static_cast<std::size_t>(-1), save_every = 0;
@@ -123,6 +130,17 @@ inline KnnModelParams knn_params(const Args& args) {
   return p;
 }
 
+/// The file an error in scan i is about: the cloud of a sequence, else the input itself.
+inline std::string source_path_for_errors(const std::string& input, std::size_t i) {
+  if (io::is_sequence_dir(input)) {
+    try {
+      return io::Sequence::open(input).cloud_path(i);
+    } catch (const std::exception&) {
+    }
+  }
+  return input + (i > 0 ? " (scan " + std::to_string(i) + ")" : "");
+}
+
 template <class Model>
 int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -145,6 +163,19 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   Mapper<Model>& mapper = *owned;
   UpEstimator up_estimate;
   std::vector<std::string> written;
+  const std::size_t map_share = map_memory_share(opt.memory_limit);
+  mapper.map().set_memory_limit(map_share);
+  char res_text[32];
+  std::snprintf(res_text, sizeof res_text, "%g", mapper.map().grid().resolution());
+  // Work that cannot fit: refused before it starts, naming the limit and what to change.
+  auto too_big = [&](std::size_t i, const std::string& what) {
+    return io::Error(source_path_for_errors(opt.input, i),
+                     what + " at --res " + res_text + ": more than the map's share (" +
+                         format_bytes(double(map_share)) + ") of --memory-limit " +
+                         format_bytes(opt.memory_limit) +
+                         "; use a coarser --res, a --max-range or --crop, or a higher "
+                         "--memory-limit");
+  };
   ScanStats total;
   std::size_t clouds = 0, rays = 0, rated = 0;
   std::vector<double> keyframe_ms;
@@ -167,40 +198,58 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   std::vector<Point3f> world_f;  // OctoMap model: float points, as liboctomap
   std::vector<Point3d> world;    // k-NN model: double, as the tracker keeps them
   std::vector<std::uint64_t> ids;
-  for (std::size_t i = opt.first; i < last; ++i) {
-    io::Scan scan = source.load(i);
-    up_estimate.add(scan.pose, scan.cloud.points);
-    const auto a = std::chrono::steady_clock::now();
-    if constexpr (Mapper<Model>::uses_map_cloud) {
-      io::keyframe_to_world(scan.pose, scan.cloud, opt.crop, world, ids);
-      try {
-        add(mapper.insert_keyframe(scan.pose.t, world, ids));
-      } catch (const std::invalid_argument& e) {  // e.g. clouds with and without ids mixed
-        throw io::Error(source.path(), "scan " + std::to_string(i) + ": " + e.what());
+  for (std::size_t i = opt.first; i < last; ++i) try {
+      io::Scan scan = source.load(i);
+      up_estimate.add(scan.pose, scan.cloud.points);
+      const auto a = std::chrono::steady_clock::now();
+      const Point3d origin{scan.pose.t.x(), scan.pose.t.y(), scan.pose.t.z()};
+      const std::size_t enough = map_share / kBrickBytesAtLeast;
+      if constexpr (Mapper<Model>::uses_map_cloud) {
+        io::keyframe_to_world(scan.pose, scan.cloud, opt.crop, world, ids);
+        const std::size_t bricks =
+            at_least_bricks(origin, world, mapper.map().grid().resolution(), -1.0, false, enough);
+        if (bricks > enough)
+          throw too_big(i, "the points alone need more than " + std::to_string(enough) + " bricks");
+        try {
+          add(mapper.insert_keyframe(scan.pose.t, world, ids));
+        } catch (const std::invalid_argument& e) {  // e.g. clouds with and without ids mixed
+          throw io::Error(source_path_for_errors(opt.input, i), e.what());
+        }
+      } else {
+        std::vector<Point3f>& pts = scan.cloud.points;
+        if (opt.crop > 0.0) {
+          std::size_t kept = 0;
+          for (const Point3f& p : pts)
+            if (std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= opt.crop)
+              pts[kept++] = p;
+          pts.resize(kept);
+        }
+        if (io::is_identity(scan.pose))
+          world_f.swap(pts);
+        else
+          io::transform_to_world(scan.pose, pts, world_f);
+        const std::size_t bricks = at_least_bricks(
+            origin, world_f, mapper.map().grid().resolution(), opt.max_range, true, enough);
+        if (bricks > enough)
+          throw too_big(i, "its rays need more than " + std::to_string(enough) + " bricks (" +
+                               format_bytes(double(enough) * kBrickBytesAtLeast) + ")");
+        add(mapper.insert_keyframe(scan.pose.t, world_f));
       }
-    } else {
-      std::vector<Point3f>& pts = scan.cloud.points;
-      if (opt.crop > 0.0) {
-        std::size_t kept = 0;
-        for (const Point3f& p : pts)
-          if (std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= opt.crop)
-            pts[kept++] = p;
-        pts.resize(kept);
+      keyframe_ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
+      progress.update(i + 1 - opt.first);
+      if (opt.save_every && (i + 1 - opt.first) % opt.save_every == 0 && i + 1 < last) {
+        if (args.has("--out-bt")) io::write_bt(args.str("--out-bt"), mapper.map());
+        if (args.has("--out-ot")) io::write_ot(args.str("--out-ot"), mapper.map());
       }
-      if (io::is_identity(scan.pose))
-        world_f.swap(pts);
-      else
-        io::transform_to_world(scan.pose, pts, world_f);
-      add(mapper.insert_keyframe(scan.pose.t, world_f));
+    } catch (const MemoryLimitError&) {
+      throw too_big(i, "the map needs more memory");
+    } catch (const std::bad_alloc&) {
+      throw io::Error(source_path_for_errors(opt.input, i),
+                      std::string("out of memory (--memory-limit ") +
+                          format_bytes(opt.memory_limit) + ") reading or mapping it at --res " +
+                          res_text + "; a higher --memory-limit, or a coarser --res or --crop");
     }
-    keyframe_ms.push_back(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
-    progress.update(i + 1 - opt.first);
-    if (opt.save_every && (i + 1 - opt.first) % opt.save_every == 0 && i + 1 < last) {
-      if (args.has("--out-bt")) io::write_bt(args.str("--out-bt"), mapper.map());
-      if (args.has("--out-ot")) io::write_ot(args.str("--out-ot"), mapper.map());
-    }
-  }
   progress.finish();
   const auto& map = mapper.map();
 
@@ -213,6 +262,7 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
                  "--res %g); use a coarser --res (the library's WideKey maps reach 64x farther)\n",
                  opt.input.c_str(), total.out_of_range, map.grid().max_coord(), opt.res);
 
+  io::CommitGroup outputs;  // all written, then all renamed
   if (!opt.out_voxels.empty()) {
     const io::VoxelSelection which = opt.which == "all"        ? io::VoxelSelection::all
                                      : opt.which == "occupied" ? io::VoxelSelection::occupied
@@ -221,6 +271,7 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
     written.push_back(opt.out_voxels);
   }
   write_map_outputs(map, args, up_axis(args, up_estimate.result()), model_title(model), written);
+  outputs.commit();
 
   if constexpr (Mapper<Model>::uses_map_cloud) {
     const auto& tr = mapper.tracker();
@@ -249,18 +300,21 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
 }
 
 inline int run_map(const std::vector<std::string>& argv) {
-  const Args args(
-      argv,
-      with_map_outputs({"--input",      "--res",        "--model",   "--max-range", "--crop",
-                        "--out-voxels", "--voxels",     "--threads", "--k",         "--w",
-                        "--p-upper",    "--p-w",        "--p-free",  "--s-limit",   "--corrections",
-                        "--init-map",   "--save-every", "--first",   "--count",     "--min-views"}),
-      with_map_output_flags({"--discretize"}));
+  const Args args(argv,
+                  with_map_outputs({"--input",       "--res",        "--model",       "--max-range",
+                                    "--crop",        "--out-voxels", "--voxels",      "--threads",
+                                    "--k",           "--w",          "--p-upper",     "--p-w",
+                                    "--p-free",      "--s-limit",    "--corrections", "--init-map",
+                                    "--save-every",  "--first",      "--count",       "--min-views",
+                                    "--memory-limit"}),
+                  with_map_output_flags({"--discretize"}));
   if (args.help()) {
     std::fputs(map_help().c_str(), stdout);
     return 0;
   }
   check_map_outputs(args);
+  check_outputs(requested_outputs(
+      args, {"--out-voxels", "--out-bt", "--out-ot", "--out-ply", "--out-png", "--out-html"}));
   const std::string input = args.required("--input");
   if (!args.has("--res") && !args.has("--init-map"))
     throw UsageError("--res is required (see --help)");
@@ -286,7 +340,7 @@ inline int run_map(const std::vector<std::string>& argv) {
   if (threads < 1 || threads > 1024)
     throw UsageError("--threads must be an integer from 1 to 1024, got '" + args.str("--threads") +
                      "'");
-  opt.threads = static_cast<unsigned>(threads);
+  opt.threads = cap_threads("map", threads);
   opt.out_voxels = args.str("--out-voxels");
   opt.res = args.has("--res") ? res : 0.0;
   opt.init_map = args.str("--init-map");
@@ -318,6 +372,10 @@ inline int run_map(const std::vector<std::string>& argv) {
         throw UsageError(std::string("--corrections maps the whole sequence: it cannot be "
                                      "combined with ") +
                          whole_run_only);
+  opt.memory_limit = args.has("--memory-limit")
+                         ? parse_memory_size("--memory-limit", args.str("--memory-limit"))
+                         : default_memory_limit();
+  apply_memory_limit(opt.memory_limit);
 
   if (model == "octomap") {
     for (const char* knn_only : {"--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"})

@@ -69,6 +69,9 @@ inline void check_map_outputs(const Args& args) {
     throw UsageError("--out-ot needs a file name ending in .ot, got '" + args.str("--out-ot") +
                      "'");
   if (args.has("--up")) parse_up_axis(args.str("--up"));
+  if (args.has("--out-png") && lower_extension(args.str("--out-png")) != ".png")
+    throw UsageError("--out-png writes PNG only and needs a file name ending in .png, got '" +
+                     args.str("--out-png") + "'");
   if ((args.flag("--ply-cubes") || args.flag("--ply-free")) && !args.has("--out-ply"))
     throw UsageError("--ply-cubes and --ply-free need --out-ply");
 }

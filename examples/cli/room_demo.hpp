@@ -16,6 +16,7 @@
 #include <knnocc/io/voxel_list.hpp>
 
 #include "args.hpp"
+#include "output_set.hpp"
 
 namespace knnocc::cli {
 
@@ -104,6 +105,7 @@ inline int run_room_demo(const std::vector<std::string>& argv) {
     std::fputs(room_demo_help(), stdout);
     return 0;
   }
+  check_outputs(requested_outputs(args, {"--out-voxels"}));
   const double res = args.number("--res", 0.1);
   if (!(res >= 0.02 && res <= 1.0)) throw UsageError("--res must be in [0.02, 1] for the demo");
   const long seed = args.integer("--seed", 1);

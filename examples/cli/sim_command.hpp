@@ -13,6 +13,7 @@
 #include <knnocc/sim/tree_scene.hpp>
 
 #include "args.hpp"
+#include "output_set.hpp"
 
 namespace knnocc::cli {
 
@@ -46,6 +47,8 @@ options:
   --repeat N        a patch is re-observed (same ids) by up to N following keyframes
   --repeat-prob P   probability of each re-observation (default 1)
   --depth-gain G    outlier rate and depth error grow as (depth / 3.5 m)^G (default 0)
+DIR must be new or an empty folder: it is written aside (DIR.tmp-XXXXXX) and renamed when
+complete, so a failed run leaves no partial folder.
 )";
 }
 
@@ -91,6 +94,7 @@ inline int run_sim(const std::vector<std::string>& argv) {
     return 0;
   }
   const std::string out = args.required("--out");
+  io::StagingDir stage(out);  // refuses a non-empty folder before any work; renamed at the end
   sim::TreeScene scene(sim_params(args));
   const auto keyframes = scene.keyframes();
   std::vector<io::Pose> poses;
@@ -109,7 +113,7 @@ inline int run_sim(const std::vector<std::string>& argv) {
   const double drift = args.number("--drift", 0.0);
   if (args.has("--drift") && !(drift >= 0.0 && drift <= 10.0))
     throw UsageError("--drift must be in [0, 10] degrees per keyframe");
-  const std::filesystem::path dir(out);
+  const std::filesystem::path dir(stage.path());
   if (args.has("--drift")) {
     sim::DriftParams dp;
     dp.heading_drift = drift * M_PI / 180.0;
@@ -126,8 +130,9 @@ inline int run_sim(const std::vector<std::string>& argv) {
                 run.max_offset);
     poses = run.tracked;
   }
-  io::write_sequence(out, poses, clouds);
+  io::write_sequence(stage.path(), poses, clouds);
   eval::write_reference((dir / "reference.txt").string(), scene.reference());
+  stage.commit();
   std::printf("keyframes %zu points %zu outliers %zu map_points %zu seen_once %.4f\n",
               keyframes.size(), points, outliers, distinct,
               sim::seen_once_fraction(keyframes, 4.0));

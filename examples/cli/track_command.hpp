@@ -13,6 +13,7 @@
 #include <knnocc/knn/tracker.hpp>
 
 #include "args.hpp"
+#include "output_set.hpp"
 #include "progress.hpp"
 
 namespace knnocc::cli {
@@ -53,6 +54,7 @@ int run_track_with(const Args& args, const Policy& policy) {
   const double max_range = args.number("--max-range", -1.0);
   if (args.has("--max-range") && !(max_range > 0.0)) throw UsageError("--max-range must be > 0");
   const std::string stats_path = args.required("--out-stats");
+  check_outputs(requested_outputs(args, {"--out-stats", "--out-s"}));
 
   const auto seq = io::Sequence::open(input);
   KnnTracker<Policy> tracker(params, policy);
@@ -83,6 +85,7 @@ int run_track_with(const Args& args, const Policy& policy) {
     std::fprintf(stderr, "knnocc track: %s: skipped %zu points with NaN/Inf coordinates\n",
                  input.c_str(), map_cloud.skipped_nonfinite());
 
+  io::CommitGroup outputs;  // both written, then both renamed
   io::AtomicFile out(stats_path);
   out.write("# index N mu sigma new removed affected microseconds\n");
   out.write(stats);
@@ -108,6 +111,7 @@ int run_track_with(const Args& args, const Policy& policy) {
     s_out.commit();
   }
   out.commit();
+  outputs.commit();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("keyframes %zu points %zu N %zu mu %.6f sigma %.6f seconds %.3f\n", keyframes,

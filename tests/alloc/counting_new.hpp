@@ -13,4 +13,11 @@ std::size_t allocations();
 std::size_t largest_allocation();
 void reset_largest_allocation();
 
+/// Bytes held through operator new right now, and the most held since the last reset (glibc:
+/// malloc_usable_size; elsewhere both stay 0 and the tests that need them skip).
+std::size_t live_bytes();
+std::size_t peak_live_bytes();
+void reset_peak_live_bytes();
+bool tracks_live_bytes();
+
 }  // namespace knnocc::test

@@ -249,3 +249,51 @@ TEST_CASE("pcd.malformed files throw io::Error naming the file, without huge all
   check_pcd_error("nosizes.pcd", kXyzHeader + "WIDTH 1\nHEIGHT 1\nDATA binary_compressed\nab",
                   "no compressed-data sizes");
 }
+
+// Header parsing is linear and the header bounded (1 MiB): many fields are parsed, a 200,000
+// field header is refused. A field costs a 72-byte record (and a 32-byte word while parsing) per
+// at least 8 header bytes (its name, SIZE, TYPE and COUNT entries): at most 16 times the header.
+TEST_CASE("pcd.long headers: 40,000 fields parsed, 200,000 refused") {
+  auto header_with = [](std::size_t extra, const std::string& dup) {
+    std::string fields = "FIELDS x y z", size = "SIZE 4 4 4", type = "TYPE F F F",
+                count = "COUNT 1 1 1";
+    for (std::size_t i = 0; i < extra; ++i) {
+      fields += " f" + std::to_string(i);
+      size += " 1";
+      type += " U";
+      count += " 1";
+    }
+    if (!dup.empty()) {
+      fields += " " + dup;
+      size += " 1";
+      type += " U";
+      count += " 1";
+    }
+    return "VERSION 0.7\n" + fields + "\n" + size + "\n" + type + "\n" + count +
+           "\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA binary\n";
+  };
+  {
+    std::string bytes = header_with(40000, "");
+    const float xyz[3] = {1.5f, -2.f, 3.f};
+    bytes.append(reinterpret_cast<const char*>(xyz), 12);
+    bytes.append(40000, '\7');
+    const std::string path = pcd_file("many_fields.pcd");
+    write_file(path, bytes);
+    knnocc::test::reset_largest_allocation();
+    const io::Cloud c = io::read_pcd(path);
+    REQUIRE(c.points.size() == 1);
+    CHECK(c.points[0].x == 1.5f);
+    CHECK(c.points[0].z == 3.f);
+    CHECK(knnocc::test::largest_allocation() < 16 * bytes.size());
+  }
+  {
+    const std::string path = pcd_file("dup_field.pcd");
+    const std::string bytes = header_with(40000, "f39999");
+    write_file(path, bytes);
+    knnocc::test::reset_largest_allocation();
+    CHECK_THROWS_WITH_AS(io::read_pcd(path), doctest::Contains("duplicate field f39999"),
+                         io::Error);
+    CHECK(knnocc::test::largest_allocation() < 16 * bytes.size());
+  }
+  check_pcd_error("huge_header.pcd", header_with(200000, ""), "PCD header is longer than 1 MiB");
+}

@@ -1,36 +1,189 @@
 #pragma once
 // AtomicFile: how every knnocc output is written (failures throw io::Error naming the target).
+// CommitGroup: several outputs committed as a set; StagingDir: a folder output built aside.
 
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <memory>
 #include <string>
 #include <system_error>
+#include <utility>
+#include <vector>
 
+#include "detail/temporaries.hpp"
 #include "error.hpp"
 
 namespace knnocc::io {
 
 namespace detail {
 inline std::string errno_text(int err) { return std::generic_category().message(err); }
+
+/// Where the temporary of `target` goes: "<dir>/<name>.tmp-XXXXXX" (the name shortened so the
+/// whole stays within a file-name limit of 255 bytes).
+inline std::string temporary_template(const std::string& target) {
+  const std::filesystem::path p(target);
+  std::string name = p.filename().string();
+  if (name.size() > 200) name.resize(200);
+  const std::filesystem::path dir = p.parent_path();
+  return (dir.empty() ? std::string() : dir.string() + "/") + name + ".tmp-XXXXXX";
+}
+
+#if KNNOCC_POSIX_FILES
+/// The permission bits a newly created file would get (0666 minus the umask), read without
+/// changing the process's umask where /proc says it.
+inline mode_t new_file_mode() {
+  static const mode_t mode = [] {
+    if (std::FILE* f = std::fopen("/proc/self/status", "r")) {
+      char line[256];
+      unsigned m = 0;
+      while (std::fgets(line, sizeof line, f)) {
+        if (std::sscanf(line, "Umask: %o", &m) == 1) {
+          std::fclose(f);
+          return static_cast<mode_t>(0666 & ~m);
+        }
+      }
+      std::fclose(f);
+    }
+    const mode_t m = ::umask(022);
+    ::umask(m);
+    return static_cast<mode_t>(0666 & ~m);
+  }();
+  return mode;
+}
+#endif
+
+class CommitGroupBase;
+inline CommitGroupBase*& current_group() {
+  thread_local CommitGroupBase* group = nullptr;
+  return group;
+}
+
+/// A closed temporary waiting for its rename; removes it (and its signal registration) unless
+/// renamed.
+struct PendingFile {
+  std::unique_ptr<std::string> tmp;  // stable c_str() for the signal registry
+  std::string target;
+  int slot = -1;
+  PendingFile() = default;
+  PendingFile(PendingFile&& o) noexcept
+      : tmp(std::move(o.tmp)), target(std::move(o.target)), slot(std::exchange(o.slot, -1)) {}
+  PendingFile& operator=(PendingFile&&) = delete;
+  ~PendingFile() { discard(); }
+  void discard() noexcept {
+    if (tmp) std::remove(tmp->c_str());
+    release();
+  }
+  void release() noexcept {
+    unregister_temporary(std::exchange(slot, -1));
+    tmp.reset();
+  }
+  void rename() {
+    if (std::rename(tmp->c_str(), target.c_str()) != 0) {
+      const int err = errno;
+      throw Error(target, "cannot rename '" + *tmp + "' to the target: " + errno_text(err));
+    }
+    release();
+  }
+};
+
+class CommitGroupBase {
+ public:
+  void defer(PendingFile&& f) { pending_.push_back(std::move(f)); }
+
+ protected:
+  std::vector<PendingFile> pending_;
+};
 }  // namespace detail
 
-// Writes to "<path>.tmp" in the same directory and renames over <path> on commit(), so readers
-// never see a half-written file. Without commit() (e.g. an exception) the temp file is removed.
+/// Removes every temporary knnocc is writing when SIGINT, SIGTERM or SIGHUP arrives, then dies of
+/// the signal as it would have (a signal the process ignores stays ignored). For programs: the
+/// library never installs it by itself.
+inline void remove_temporaries_on_signal() {
+  for (int sig : {SIGINT, SIGTERM
+#ifdef SIGHUP
+                  ,
+                  SIGHUP
+#endif
+       }) {
+    auto old = std::signal(sig, detail::temporaries_signal_handler);
+    if (old == SIG_IGN) std::signal(sig, SIG_IGN);
+  }
+}
+
+/// Writes to a new, uniquely named temporary file beside <path> (created exclusively, so a
+/// user's file is never taken over and concurrent writers of one path never share a file) and
+/// renames it over <path> on commit(): readers never see a half-written file. Without commit()
+/// (e.g. an exception) the temporary is removed. A target that exists and is not a regular file
+/// (a device such as /dev/null, a FIFO) is written directly, never replaced; a symbolic link is
+/// followed, so the file it names is replaced and the link stays. A new file gets the usual
+/// permissions (0666 minus the umask); a replaced file keeps its own.
+/// While a CommitGroup is open on the thread, commit() only closes the file; the group renames.
 class AtomicFile {
  public:
-  explicit AtomicFile(const std::string& path) : path_(path), tmp_(path + ".tmp") {
-    file_ = std::fopen(tmp_.c_str(), "wb");
-    if (!file_) {
-      throw Error(path_,
-                  "cannot create temporary file '" + tmp_ + "': " + detail::errno_text(errno));
+  explicit AtomicFile(const std::string& path) : path_(path) {
+    if (path.empty()) throw Error(path, "empty output file name");
+#if KNNOCC_POSIX_FILES
+    std::string target = path;
+    struct stat st;
+    mode_t mode = detail::new_file_mode();
+    if (::stat(path.c_str(), &st) == 0) {
+      if (S_ISDIR(st.st_mode)) throw Error(path_, "is a directory");
+      if (!S_ISREG(st.st_mode)) {  // device, FIFO, socket: write in place
+        file_ = std::fopen(path.c_str(), "wb");
+        if (!file_) fail("cannot open for writing");
+        direct_ = true;
+        return;
+      }
+      mode = st.st_mode & 07777;
+      struct stat lst;
+      if (::lstat(path.c_str(), &lst) == 0 && S_ISLNK(lst.st_mode)) {
+        std::error_code ec;
+        const auto real = std::filesystem::canonical(path, ec);
+        if (!ec) target = real.string();
+      }
     }
+    target_ = target;
+    tmp_ = std::make_unique<std::string>(detail::temporary_template(target));
+    const int fd = ::mkstemp(tmp_->data());  // O_CREAT | O_EXCL, a fresh name
+    if (fd < 0) {
+      const int err = errno;
+      throw Error(path_, "cannot create temporary file beside it: " + detail::errno_text(err));
+    }
+    slot_ = detail::register_temporary(tmp_->c_str());
+    (void)::fchmod(fd, mode);
+    file_ = ::fdopen(fd, "wb");
+    if (!file_) {
+      const int err = errno;
+      ::close(fd);
+      discard();
+      throw Error(path_, "cannot open a temporary file: " + detail::errno_text(err));
+    }
+#else
+    target_ = path;
+    for (int i = 0; i < 1000 && !file_; ++i) {
+      tmp_ = std::make_unique<std::string>(path + ".tmp-" + std::to_string(i));
+      if (std::FILE* probe = std::fopen(tmp_->c_str(), "rb")) {
+        std::fclose(probe);
+        continue;
+      }
+      file_ = std::fopen(tmp_->c_str(), "wb");
+    }
+    if (!file_) fail("cannot create a temporary file beside it");
+    slot_ = detail::register_temporary(tmp_->c_str());
+#endif
   }
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
   ~AtomicFile() {
     if (file_) std::fclose(file_);
-    if (!committed_) std::remove(tmp_.c_str());
+    discard();
   }
+
+  /// The temporary being written (empty when the target is written directly).
+  std::string temporary() const { return tmp_ ? *tmp_ : std::string(); }
 
   void write(const char* bytes, std::size_t n) {
     if (n != 0 && std::fwrite(bytes, 1, n, file_) != n) fail("write failed");
@@ -44,22 +197,150 @@ class AtomicFile {
     const bool flushed = std::fflush(f) == 0;
     const int flush_err = errno;
     if (std::fclose(f) != 0 || !flushed) fail_errno("write failed", flushed ? errno : flush_err);
-    if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-      fail_errno("cannot rename '" + tmp_ + "' to the target", errno);
-    }
-    committed_ = true;
+    if (direct_) return;
+    detail::PendingFile pending;
+    pending.tmp = std::move(tmp_);
+    pending.target = target_;
+    pending.slot = std::exchange(slot_, -1);
+    if (detail::CommitGroupBase* group = detail::current_group())
+      group->defer(std::move(pending));
+    else
+      pending.rename();
   }
 
  private:
+  void discard() noexcept {
+    if (tmp_) std::remove(tmp_->c_str());
+    detail::unregister_temporary(std::exchange(slot_, -1));
+    tmp_.reset();
+  }
   [[noreturn]] void fail(const std::string& what) { fail_errno(what, errno); }
   [[noreturn]] void fail_errno(const std::string& what, int err) {
     throw Error(path_, what + (err ? ": " + detail::errno_text(err) : std::string()));
   }
 
-  std::string path_;
-  std::string tmp_;
+  std::string path_, target_;
+  std::unique_ptr<std::string> tmp_;
+  int slot_ = -1;
   std::FILE* file_ = nullptr;
-  bool committed_ = false;
+  bool direct_ = false;
+};
+
+/// Commits the AtomicFiles of one thread as a set: while the group is open, their commit() only
+/// closes them; commit() here renames them all, after every one was written completely. Without
+/// commit() (an exception while writing any of them) every temporary is removed and no target
+/// is touched. (A rename itself failing midway leaves the earlier targets replaced; renames in one
+/// directory do not fail once the temporaries exist, short of a concurrent change to it.)
+class CommitGroup : public detail::CommitGroupBase {
+ public:
+  CommitGroup() : outer_(std::exchange(detail::current_group(), this)) {}
+  CommitGroup(const CommitGroup&) = delete;
+  CommitGroup& operator=(const CommitGroup&) = delete;
+  ~CommitGroup() {
+    if (detail::current_group() == this) detail::current_group() = outer_;
+  }
+  void commit() {
+    if (detail::current_group() == this) detail::current_group() = outer_;
+    for (auto& f : pending_) f.rename();
+    pending_.clear();
+  }
+
+ private:
+  detail::CommitGroupBase* outer_;
+};
+
+/// A folder output built aside: files go into a fresh folder "<dir>.tmp-XXXXXX" beside <dir>
+/// (path()), and commit() renames it to <dir>. <dir> must not exist or be an empty folder
+/// (replaced), or a folder the `replaceable` predicate accepts (moved aside, and removed once the
+/// new folder is in place); any other non-empty folder is refused in the constructor, before any
+/// work. Without commit()
+/// the staging folder and its contents are removed (also on SIGINT/SIGTERM with
+/// remove_temporaries_on_signal).
+class StagingDir {
+ public:
+  /// Says whether an existing non-empty folder may be replaced as a whole (e.g. the output of an
+  /// earlier run of the same command); null: never.
+  using Replaceable = bool (*)(const std::string& dir);
+
+  explicit StagingDir(const std::string& dir, Replaceable replaceable = nullptr)
+      : dir_(dir), replaceable_(replaceable) {
+    namespace fs = std::filesystem;
+    if (dir.empty()) throw Error(dir, "empty output folder name");
+    check_target(dir, replaceable_);
+    fs::path target(dir);
+    if (!target.has_filename()) target = target.parent_path();  // "out/" -> "out"
+    const fs::path parent = target.parent_path();
+    std::string tmpl = (parent.empty() ? std::string() : parent.string() + "/") +
+                       target.filename().string() + ".tmp-XXXXXX";
+    tmp_ = std::make_unique<std::string>(tmpl);
+#if KNNOCC_POSIX_FILES
+    if (!::mkdtemp(tmp_->data())) {
+      const int err = errno;
+      throw Error(dir, "cannot create a folder beside it: " + detail::errno_text(err));
+    }
+#else
+    std::error_code ec;
+    tmp_->replace(tmp_->size() - 6, 6, "000000");
+    if (!fs::create_directory(*tmp_, ec)) throw Error(dir, "cannot create a folder beside it");
+#endif
+    slot_ = detail::register_temporary(tmp_->c_str(), true);
+  }
+  StagingDir(const StagingDir&) = delete;
+  StagingDir& operator=(const StagingDir&) = delete;
+  ~StagingDir() {
+    if (!tmp_) return;
+    std::error_code ec;
+    std::filesystem::remove_all(*tmp_, ec);
+    detail::unregister_temporary(slot_);
+  }
+
+  /// Where to write the folder's contents until commit().
+  const std::string& path() const { return *tmp_; }
+
+  void commit() {
+    check_target(dir_, replaceable_);
+    std::string old;  // a replaceable earlier folder, moved aside until the new one is in place
+    if (std::filesystem::is_directory(dir_)) {
+      std::error_code ec;
+      std::filesystem::remove(dir_, ec);  // empty: removed; otherwise moved aside
+      if (std::filesystem::exists(dir_)) {
+        old = *tmp_ + ".old";
+        if (std::rename(dir_.c_str(), old.c_str()) != 0) {
+          const int err = errno;
+          throw Error(dir_, "cannot move the earlier folder aside: " + detail::errno_text(err));
+        }
+      }
+    }
+    if (std::rename(tmp_->c_str(), dir_.c_str()) != 0) {
+      const int err = errno;
+      if (!old.empty()) std::rename(old.c_str(), dir_.c_str());  // the earlier folder back
+      throw Error(dir_, "cannot rename '" + *tmp_ + "' to the target: " + detail::errno_text(err));
+    }
+    if (!old.empty()) {
+      std::error_code ec;
+      std::filesystem::remove_all(old, ec);
+    }
+    detail::unregister_temporary(std::exchange(slot_, -1));
+    tmp_.reset();
+  }
+
+  /// Throws unless <dir> is absent, an empty folder, or a folder `replaceable` accepts.
+  static void check_target(const std::string& dir, Replaceable replaceable = nullptr) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const auto st = fs::symlink_status(dir, ec);
+    if (ec || st.type() == fs::file_type::not_found) return;
+    if (st.type() != fs::file_type::directory)
+      throw Error(dir, "exists and is not a folder; give a new folder name");
+    if (!fs::is_empty(dir, ec) && !(replaceable && replaceable(dir)))
+      throw Error(dir, "folder is not empty; give a new or empty folder (nothing is overwritten)");
+  }
+
+ private:
+  std::string dir_;
+  Replaceable replaceable_ = nullptr;
+  std::unique_ptr<std::string> tmp_;
+  int slot_ = -1;
 };
 
 }  // namespace knnocc::io

@@ -46,6 +46,10 @@ struct OctreeReadOptions {
   /// Largest number of finest-level voxels the file's leaves may cover (pruned leaves at
   /// coarse depths cover up to 8^15 each); more is an io::Error.
   std::uint64_t max_voxels = std::uint64_t{1} << 31;
+  /// Memory limit of the map that is built (OccupancyMap::set_memory_limit; 0: none). A file
+  /// whose leaves surely need more (every 512 voxels take at least a brick record and an index
+  /// slot) is an io::Error before the map is made.
+  std::size_t memory_limit = 0;
 };
 
 /// What a .bt/.ot file holds, from one validating pass (no map is built).
@@ -351,7 +355,17 @@ inline OccupancyMap<OcKey> read_octree(const std::string& path,
                             std::to_string(detail::voxels_in_node(d)));
     }
   });
+  using Brick = OccupancyMap<OcKey>::Brick;
+  const std::uint64_t bricks = (voxels + kBrickVoxels - 1) / kBrickVoxels;
+  const double at_least = static_cast<double>(bricks) * (sizeof(Brick) + 24);
+  if (options.memory_limit && at_least > static_cast<double>(options.memory_limit)) {
+    throw Error(path, "the tree's " + std::to_string(voxels) + " voxels need at least " +
+                          std::to_string(static_cast<std::uint64_t>(at_least / 1e6)) +
+                          " MB as a map, more than its memory limit of " +
+                          std::to_string(options.memory_limit / 1000000) + " MB");
+  }
   OccupancyMap<OcKey> map(h.resolution, options.params);
+  map.set_memory_limit(options.memory_limit);
   const OccupancyParams& p = map.params();
   detail::walk_octree_file(path, buf, h,
                            [&](int d, const detail::NodeCorner& c, float v, bool occupied_code) {

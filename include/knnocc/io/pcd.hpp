@@ -21,6 +21,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "atomic_file.hpp"
@@ -78,6 +79,7 @@ inline PcdHeader parse_pcd_header(const std::string& path, const char* data, std
     ++line;
     const void* nl = std::memchr(p, '\n', static_cast<std::size_t>(end - p));
     const char* le = nl ? static_cast<const char*>(nl) : end;
+    check_header_length(path, "PCD", static_cast<std::size_t>(le - data));
     std::vector<std::string> w = split_words(p, le);
     p = nl ? le + 1 : end;
     const auto bad = [&](const std::string& why) {
@@ -162,6 +164,8 @@ inline PcdHeader parse_pcd_header(const std::string& path, const char* data, std
                           std::to_string(h.info.height) + " != POINTS " +
                           std::to_string(h.info.points));
   }
+  std::unordered_set<std::string> names;  // duplicates found in linear time
+  h.fields.reserve(n);
   for (std::size_t i = 0; i < n; ++i) {
     PcdField f;
     f.name = h.info.fields[i];
@@ -184,11 +188,8 @@ inline PcdHeader parse_pcd_header(const std::string& path, const char* data, std
     f.first_token = h.tokens;
     h.record_size += f.size * f.count;
     h.tokens += f.count;
-    if (f.name != "_") {
-      for (std::size_t j = 0; j < i; ++j) {
-        if (h.fields[j].name == f.name) throw Error(path, "PCD header: duplicate field " + f.name);
-      }
-    }
+    if (f.name != "_" && !names.insert(f.name).second)
+      throw Error(path, "PCD header: duplicate field " + f.name);
     const int idx = static_cast<int>(i);
     if (f.name == "x") h.x = idx;
     if (f.name == "y") h.y = idx;

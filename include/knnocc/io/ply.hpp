@@ -22,6 +22,7 @@
 #include <cstring>
 #include <string>
 #include <type_traits>
+#include <unordered_set>
 #include <vector>
 
 #include "cloud.hpp"
@@ -134,11 +135,16 @@ inline PlyHeader parse_ply_header(const std::string& path, const char* data, std
       throw Error(path, "not a PLY file (first line is not 'ply')");
     }
   }
+  // Names seen so far (the checks for duplicates stay linear in the header's length) and the
+  // current element's record size.
+  std::unordered_set<std::string> element_names, property_names;
+  std::size_t record_bytes = 0;
   while (true) {
     if (p == end) throw Error(path, "PLY header has no end_header line");
     ++line;
     const void* nl = std::memchr(p, '\n', static_cast<std::size_t>(end - p));
     const char* le = nl ? static_cast<const char*>(nl) : end;
+    check_header_length(path, "PLY", static_cast<std::size_t>(le - data));
     const char* next = nl ? le + 1 : end;
     const std::vector<std::string> w = split_words(p, le);
     p = next;
@@ -172,9 +178,9 @@ inline PlyHeader parse_ply_header(const std::string& path, const char* data, std
       if (!parse_int_token(w[2].data(), w[2].data() + w[2].size(), el.count)) {
         throw bad("invalid element count '" + w[2] + "'");
       }
-      for (const PlyElement& other : h.elements) {
-        if (other.name == el.name) throw bad("duplicate element '" + el.name + "'");
-      }
+      if (!element_names.insert(el.name).second) throw bad("duplicate element '" + el.name + "'");
+      property_names.clear();
+      record_bytes = 0;
       h.elements.push_back(std::move(el));
     } else if (key == "property") {
       if (h.elements.empty()) throw bad("property before any element");
@@ -200,10 +206,11 @@ inline PlyHeader parse_ply_header(const std::string& path, const char* data, std
         prop.name = w[2];
       }
       PlyElement& el = h.elements.back();
-      if (el.find(prop.name.c_str()) >= 0) {
+      if (!property_names.insert(prop.name).second) {
         throw bad("duplicate property '" + prop.name + "' in element '" + el.name + "'");
       }
-      prop.offset = el.record_size();
+      prop.offset = record_bytes;
+      record_bytes += ply_type_size(prop.type);
       el.props.push_back(std::move(prop));
     } else {
       throw bad("unknown PLY header keyword '" + key + "'");

@@ -9,11 +9,13 @@
 // Scans load one at a time (a .graph file is read whole when opened).
 
 #include <cctype>
+#include <cerrno>
 #include <cstddef>
 #include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
+#include <system_error>
 #include <utility>
 
 #include "cloud.hpp"
@@ -40,6 +42,10 @@ class ScanSource {
       s.sequence_.emplace(Sequence::open(path));
       return s;
     }
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec))  // before the extension says anything
+      throw Error(path,
+                  "cannot open: " + (ec ? ec.message() : std::generic_category().message(ENOENT)));
     std::string ext = std::filesystem::path(path).extension().string();
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     if (ext == ".graph") {

@@ -60,7 +60,13 @@ class Sequence {
     seq.dir_ = dir;
     seq.poses_ = read_trajectory(poses_file.string());
     const fs::path calib = root / "calib.txt";
-    if (cloud_dir.filename() == "velodyne" && fs::is_regular_file(calib, ec)) {
+    if (cloud_dir.filename() == "velodyne" && !fs::is_regular_file(calib, ec)) {
+      throw Error(calib.string(),
+                  "missing: a velodyne/ sequence needs KITTI's calib.txt (its Tr takes the "
+                  "Velodyne frame to the camera poses of poses.txt); for poses already in the "
+                  "scanner's frame name the folder clouds/");
+    }
+    if (cloud_dir.filename() == "velodyne") {
       const Eigen::Isometry3d tr = read_kitti_calib_tr(calib.string());
       for (Pose& p : seq.poses_) {
         p.t = p.q * tr.translation() + p.t;

@@ -30,6 +30,7 @@
 #include "../core/grid.hpp"
 #include "../core/key.hpp"
 #include "../core/log_odds.hpp"
+#include "../core/memory_limit.hpp"
 #include "brick.hpp"
 #include "detail/brick_values.hpp"
 #include "value_pool.hpp"
@@ -297,6 +298,15 @@ class OccupancyMap {
     return n;
   }
 
+  /// Bounds memory_usage() to `bytes` (0, the default: no bound). A write that needs a new brick
+  /// or value array whose storage would take memory_usage() past the limit reports
+  /// MemoryLimitError (core/memory_limit.hpp: a std::bad_alloc; without exceptions a message and
+  /// abort()) before allocating it. What was written before stays; a whole-scan insertion
+  /// (ScanInserter) refused midway may have applied part of the scan. compact() and the change
+  /// set are not bounded (compact() needs at most the value arrays once more, then frees them).
+  void set_memory_limit(std::size_t bytes) { memory_limit_ = bytes; }
+  std::size_t memory_limit() const { return memory_limit_; }
+
   /// Bytes held by the map (bricks, value slabs, hash index, change set).
   std::size_t memory_usage() const {
     std::size_t bytes = sizeof(*this) + bricks_.capacity() * sizeof(Brick) + index_.memory_usage() +
@@ -336,6 +346,7 @@ class OccupancyMap {
   /// its value array (prepare_values or update_brick allocates it). Slots stay valid until
   /// clear().
   std::uint32_t brick_slot(std::uint64_t coord) {
+    if (memory_limit_ && index_.find(coord) == detail::FlatIndex::kNone) check_new_brick(false);
     bool inserted = false;
     const auto next = static_cast<std::uint32_t>(bricks_.size());
     const std::uint32_t slot = index_.find_or_insert(coord, next, inserted);
@@ -348,6 +359,12 @@ class OccupancyMap {
   /// (growth stays geometric when called repeatedly).
   void reserve_bricks(std::size_t more) {
     const std::size_t need = bricks_.size() + more;
+    if (memory_limit_) {  // the whole scan's bricks refused before any is made
+      std::size_t grow = index_.growth_bytes(need);
+      if (bricks_.capacity() < need)
+        grow += (std::max(need, 2 * bricks_.capacity()) - bricks_.capacity()) * sizeof(Brick);
+      check_growth(grow + more * ValuePool::kArrayBytes);
+    }
     if (bricks_.capacity() < need) bricks_.reserve(std::max(need, 2 * bricks_.capacity()));
     index_.reserve(need);
   }
@@ -357,6 +374,7 @@ class OccupancyMap {
   /// different bricks from several threads call it for each brick first.
   void prepare_values(Brick& b) {
     if (b.values) return;
+    if (memory_limit_) check_growth(pool_.growth_bytes());
     b.values = pool_.allocate();
     // Values of unknown voxels are never read, so a new brick needs no filling.
     if (b.known.any()) std::fill(b.values, b.values + kBrickVoxels, b.uniform);
@@ -436,7 +454,22 @@ class OccupancyMap {
     return v;
   }
 
+  // Refuses a new brick (with_values: and its value array) that would pass the memory limit.
+  void check_new_brick(bool with_values) {
+    std::size_t grow = index_.growth_bytes(index_.size() + 1);
+    if (with_values) grow += pool_.growth_bytes();
+    if (bricks_.size() == bricks_.capacity())
+      grow += std::max<std::size_t>(bricks_.capacity(), 1) * sizeof(Brick);
+    check_growth(grow);
+  }
+  void check_growth(std::size_t grow) {
+    if (grow == 0) return;
+    const std::size_t after = memory_usage() + grow;
+    if (after > memory_limit_) detail::memory_limit_exceeded(memory_limit_, after);
+  }
+
   std::uint32_t brick_slot_for_write(std::uint64_t coord) {
+    if (memory_limit_ && index_.find(coord) == detail::FlatIndex::kNone) check_new_brick(true);
     bool inserted = false;
     const auto next = static_cast<std::uint32_t>(bricks_.size());
     const std::uint32_t slot = index_.find_or_insert(coord, next, inserted);
@@ -450,6 +483,7 @@ class OccupancyMap {
   }
 
   void write(Brick& b, int i, float v) {
+    if (memory_limit_ && !b.values && v != b.uniform) check_growth(pool_.growth_bytes());
     if (!b.known.test(i)) {
       b.known.set(i);
       ++known_count_;
@@ -526,6 +560,7 @@ class OccupancyMap {
   ValuePool pool_;  // the bricks' value arrays
   detail::FlatIndex index_;
   std::size_t known_count_ = 0;
+  std::size_t memory_limit_ = 0;  // 0: none
   bool change_detection_ = false;
   std::unordered_map<std::uint64_t, bool> changed_;
 };

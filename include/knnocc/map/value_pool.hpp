@@ -55,13 +55,17 @@ class ValuePool {
     std::vector<Slab>().swap(slabs_);
     std::vector<float*>().swap(free_);
     used_ = 0;
+    slab_bytes_ = 0;
   }
 
   /// Bytes reserved by the slabs (arrays in use, given back, and not yet handed out).
   std::size_t memory_usage() const {
-    std::size_t bytes = free_.capacity() * sizeof(float*) + slabs_.capacity() * sizeof(Slab);
-    for (const Slab& s : slabs_) bytes += detail::big_size(s.arrays * kArrayBytes);
-    return bytes;
+    return free_.capacity() * sizeof(float*) + slabs_.capacity() * sizeof(Slab) + slab_bytes_;
+  }
+  /// How much memory_usage() grows when the next array is allocated (0 when one is at hand).
+  std::size_t growth_bytes() const {
+    if (!free_.empty() || (!slabs_.empty() && used_ < slabs_.back().arrays)) return 0;
+    return detail::big_size(next_slab_arrays() * kArrayBytes) + sizeof(Slab);
   }
 
  private:
@@ -88,11 +92,13 @@ class ValuePool {
     slabs_.push_back(Slab{std::unique_ptr<float[], detail::BigFree>(data, detail::BigFree{bytes}),
                           data, arrays});
     used_ = 0;
+    slab_bytes_ += detail::big_size(bytes);
   }
 
   std::vector<Slab> slabs_;
-  std::size_t used_ = 0;      // arrays handed out from the last slab
-  std::vector<float*> free_;  // arrays given back
+  std::size_t used_ = 0;        // arrays handed out from the last slab
+  std::vector<float*> free_;    // arrays given back
+  std::size_t slab_bytes_ = 0;  // big_size() of every slab
 };
 
 }  // namespace knnocc

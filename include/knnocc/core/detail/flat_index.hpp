@@ -75,6 +75,14 @@ class FlatIndex {
   std::size_t memory_usage() const {
     return keys_.capacity() * sizeof(std::uint64_t) + values_.capacity() * sizeof(std::uint32_t);
   }
+  /// How much memory_usage() grows to hold n keys (n = size() + 1: the next new key).
+  std::size_t growth_bytes(std::size_t n) const {
+    std::size_t cap = keys_.empty() ? 64 : keys_.size();
+    while (2 * n > cap) cap *= 2;
+    return cap <= keys_.size()
+               ? 0
+               : (cap - keys_.size()) * (sizeof(std::uint64_t) + sizeof(std::uint32_t));
+  }
 
  private:
   std::size_t bucket(std::uint64_t key) const {

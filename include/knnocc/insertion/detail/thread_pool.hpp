@@ -11,13 +11,20 @@
 // while for the workers to finish before it sleeps. Idle workers stop using the CPU after kSpin. A
 // pool of more threads than the machine has hardware threads never spins: a spinning worker would
 // take a core from a thread with work.
+//
+// A worker thread that cannot be started (the system's thread or memory limit) is an error, never
+// a hang: the constructor stops and joins the workers it did start and throws std::system_error
+// ("cannot start thread W of N: ..."); without exceptions it aborts, as std::thread does.
 
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <exception>
+#include <functional>
 #include <mutex>
+#include <string>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -41,19 +48,32 @@ class ThreadPool {
   /// How long a worker spins for the next run, and run() for the workers, before sleeping.
   static constexpr std::chrono::microseconds kSpin{200};
 
-  explicit ThreadPool(unsigned size)
+  /// Starts worker w's thread running `body` (std::thread by default; tests make it fail).
+  using StartThread = std::thread (*)(unsigned w, std::function<void()> body);
+  static std::thread start_thread(unsigned, std::function<void()> body) {
+    return std::thread(std::move(body));
+  }
+
+  explicit ThreadPool(unsigned size, StartThread start = start_thread)
       : size_(size < 1 ? 1 : size), spin_(size_ <= std::thread::hardware_concurrency()) {
     threads_.reserve(size_ - 1);
-    for (unsigned w = 1; w < size_; ++w) threads_.emplace_back([this, w] { work(w); });
-  }
-  ~ThreadPool() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stop_.store(true, std::memory_order_release);
+#if KNNOCC_HAS_EXCEPTIONS
+    try {
+      for (unsigned w = 1; w < size_; ++w) threads_.push_back(start(w, [this, w] { work(w); }));
+    } catch (const std::system_error& e) {
+      const std::size_t started = threads_.size();  // workers 1..started run
+      stop();
+      throw std::system_error(e.code(), "cannot start thread " + std::to_string(started + 1) +
+                                            " of " + std::to_string(size_));
+    } catch (...) {
+      stop();
+      throw;
     }
-    wake_.notify_all();
-    for (std::thread& t : threads_) t.join();
+#else
+    for (unsigned w = 1; w < size_; ++w) threads_.push_back(start(w, [this, w] { work(w); }));
+#endif
   }
+  ~ThreadPool() { stop(); }
   ThreadPool(const ThreadPool&) = delete;
   ThreadPool& operator=(const ThreadPool&) = delete;
 
@@ -115,6 +135,16 @@ class ThreadPool {
 #else
     call_(job_, w);
 #endif
+  }
+
+  void stop() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_.store(true, std::memory_order_release);
+    }
+    wake_.notify_all();
+    for (std::thread& t : threads_) t.join();
+    threads_.clear();
   }
 
   void work(unsigned w) {

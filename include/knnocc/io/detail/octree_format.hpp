@@ -62,6 +62,7 @@ inline OctreeHeader parse_octree_header(const std::string& path, const char* dat
   std::size_t line = 1;
   while (true) {
     if (!next_line(b, e)) throw Error(path, "OctoMap header has no 'data' line");
+    check_header_length(path, "OctoMap", static_cast<std::size_t>(e - data));
     ++line;
     while (b != e && is_blank(*b)) ++b;
     if (b == e || *b == '#') continue;

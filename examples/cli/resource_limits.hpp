@@ -1,0 +1,227 @@
+#pragma once
+// What the machine allows a command: threads (capped at the hardware threads) and memory
+// (--memory-limit): the limit is the process's address-space limit, so an allocation past it
+// fails as std::bad_alloc (reported in one line, exit 2) instead of the kernel killing the
+// process; the map gets its share as OccupancyMap's memory limit; work that surely cannot fit is
+// refused before it starts (at_least_bricks()).
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <knnocc/core/detail/flat_index.hpp>
+#include <knnocc/core/point3.hpp>
+#include <knnocc/io/octomap_tree.hpp>
+#include <knnocc/map/brick.hpp>
+#include <knnocc/map/occupancy_map.hpp>
+
+#include "args.hpp"
+
+#if defined(__unix__) || defined(__APPLE__)
+#include <sys/resource.h>
+#include <unistd.h>
+#define KNNOCC_CLI_RLIMIT 1
+#else
+#define KNNOCC_CLI_RLIMIT 0
+#endif
+
+// An address-space limit would break the sanitizers' shadow memory.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define KNNOCC_CLI_SANITIZED 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || \
+    __has_feature(memory_sanitizer)
+#define KNNOCC_CLI_SANITIZED 1
+#endif
+#endif
+#ifndef KNNOCC_CLI_SANITIZED
+#define KNNOCC_CLI_SANITIZED 0
+#endif
+
+namespace knnocc::cli {
+
+/// A --threads request above the machine's hardware threads is capped there, with a note on
+/// stderr: more threads would only wait for a core (the map is the same for every count).
+inline unsigned cap_threads(const char* command, long requested) {
+  const unsigned hw = std::thread::hardware_concurrency();
+  if (hw == 0 || requested <= static_cast<long>(hw)) return static_cast<unsigned>(requested);
+  std::fprintf(stderr,
+               "knnocc %s: --threads %ld is more than the %u hardware threads of this machine; "
+               "using %u\n",
+               command, requested, hw, hw);
+  return hw;
+}
+
+/// "1.5 GB" style (decimal units).
+inline std::string format_bytes(double bytes) {
+  char s[32];
+  if (bytes >= 1e9)
+    std::snprintf(s, sizeof s, "%.1f GB", bytes / 1e9);
+  else
+    std::snprintf(s, sizeof s, "%.0f MB", bytes / 1e6);
+  return s;
+}
+
+/// The memory this machine gives the process: physical memory, lowered by an address-space
+/// limit and a cgroup (container) limit where set.
+inline double machine_memory() {
+  double bytes = 0;
+#if KNNOCC_CLI_RLIMIT
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
+  if (pages > 0 && page > 0) bytes = double(pages) * double(page);
+  rlimit rl{};
+  if (::getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY)
+    bytes = bytes > 0 ? std::min(bytes, double(rl.rlim_cur)) : double(rl.rlim_cur);
+  for (const char* cg :
+       {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {
+    if (std::FILE* f = std::fopen(cg, "r")) {
+      double v = 0;
+      if (std::fscanf(f, "%lf", &v) == 1 && v > 0) bytes = bytes > 0 ? std::min(bytes, v) : v;
+      std::fclose(f);
+    }
+  }
+#endif
+  return bytes > 0 ? bytes : 4e9;
+}
+
+/// The default --memory-limit: 80 % of machine_memory().
+inline double default_memory_limit() { return 0.8 * machine_memory(); }
+
+/// The current limit (bytes), for messages.
+inline double& memory_limit_bytes() {
+  static double bytes = 0;
+  return bytes;
+}
+
+/// Parses "2G", "512M", "1.5GB", "800000000" (decimal units K M G T, optional B); UsageError.
+inline double parse_memory_size(const std::string& option, const std::string& s) {
+  char* end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  std::string unit(end ? end : "");
+  for (char& c : unit) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  if (!unit.empty() && unit.back() == 'B') unit.pop_back();
+  const double scale = unit.empty()  ? 1
+                       : unit == "K" ? 1e3
+                       : unit == "M" ? 1e6
+                       : unit == "G" ? 1e9
+                       : unit == "T" ? 1e12
+                                     : 0;
+  if (s.empty() || end == s.c_str() || scale == 0 || !std::isfinite(v) || v * scale < 16e6)
+    throw UsageError(option + " expects a size of at least 16M such as 800M or 4G, got '" + s +
+                     "'");
+  return v * scale;
+}
+
+/// Makes `bytes` the process's address-space limit (never above the hard limit), so allocations
+/// past it fail as std::bad_alloc. Skipped in sanitizer builds.
+inline void apply_memory_limit(double bytes) {
+  memory_limit_bytes() = bytes;
+#if KNNOCC_CLI_RLIMIT && !KNNOCC_CLI_SANITIZED
+  rlimit rl{};
+  if (::getrlimit(RLIMIT_AS, &rl) != 0) return;
+  rlim_t want = bytes >= 1.8e19 ? RLIM_INFINITY : static_cast<rlim_t>(bytes);
+  if (rl.rlim_max != RLIM_INFINITY && want > rl.rlim_max) want = rl.rlim_max;
+  rl.rlim_cur = want;
+  (void)::setrlimit(RLIMIT_AS, &rl);
+#endif
+}
+
+/// The map's share of the memory limit (the rest holds clouds, rays and the k-NN tracker).
+inline std::size_t map_memory_share(double limit) { return static_cast<std::size_t>(0.75 * limit); }
+
+/// How the tool reads .bt/.ot maps: bounded by the map's share of the memory limit.
+inline io::OctreeReadOptions tree_read_options() {
+  io::OctreeReadOptions o;
+  o.memory_limit = map_memory_share(memory_limit_bytes());
+  return o;
+}
+
+/// The finest resolution the tool maps at (map --res): 16-bit keys then span +-3.3 m.
+inline constexpr double kMinResolution = 1e-4;
+
+/// A map file finer than kMinResolution is refused by every command alike.
+inline void check_tree_resolution(const std::string& path, double res) {
+  if (res < kMinResolution) {
+    char s[128];
+    std::snprintf(s, sizeof s, "resolution %g is below %g, the finest the tool maps at", res,
+                  kMinResolution);
+    throw io::Error(path, s);
+  }
+}
+
+/// A .bt/.ot map as the tool reads it: resolution checked, memory bounded.
+inline OccupancyMap<OcKey> read_tree_checked(const std::string& path) {
+  check_tree_resolution(path, io::inspect_octree(path).resolution);
+  return io::read_octree(path, tree_read_options());
+}
+
+/// The least memory one brick of a map takes: its record and its index slots (a brick that one
+/// update made uniform has no value array).
+inline constexpr std::size_t kBrickBytesAtLeast =
+    sizeof(OccupancyMap<OcKey>::Brick) + 2 * (sizeof(std::uint64_t) + sizeof(std::uint32_t));
+
+/// A lower bound on the bricks one scan creates: the distinct bricks holding points sampled
+/// along its rays (from `origin`, one sample per brick edge, rays cut at max_range when > 0;
+/// endpoints only when `rays` is false), each of which a ray passes through. Stops counting past
+/// `enough`. When sampling every ray would take more samples than 3 x `enough` (at most 4 M), a
+/// subset of the rays is sampled (still a lower bound: a limit far above 4 M bricks is left to
+/// the map's own memory limit); when the samples cannot reach `enough` it returns 0 at once.
+template <class P>
+std::size_t at_least_bricks(const Point3d& origin, const std::vector<P>& pts, double res,
+                            double max_range, bool rays, std::size_t enough) {
+  const double edge = res * kBrickEdge;
+  const double reach = 32768.0 * res;  // the key range: farther endpoints are skipped, not mapped
+  auto in_range = [&](double x, double y, double z) {
+    return std::fabs(x) < reach && std::fabs(y) < reach && std::fabs(z) < reach;
+  };
+  if (!in_range(origin.x, origin.y, origin.z)) return 0;
+  // Length of the stored part of the ray to p (0 for a skipped point).
+  auto length = [&](const P& p, double& full) {
+    const double dx = double(p.x) - origin.x, dy = double(p.y) - origin.y,
+                 dz = double(p.z) - origin.z;
+    full = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!std::isfinite(full) || !in_range(p.x, p.y, p.z)) return -1.0;
+    return max_range > 0 ? std::min(full, max_range) : full;
+  };
+  double samples = 0, full = 0;
+  for (const P& p : pts) {
+    const double l = length(p, full);
+    if (l >= 0) samples += rays ? 2 + std::floor(l / edge) : 1;
+  }
+  if (samples <= double(enough)) return 0;  // cannot reach `enough`: nothing to refuse
+  // Proving more than `enough` bricks takes more than `enough` samples: sample up to three times
+  // that, and at most 4 M (the set of seen bricks then stays below ~100 MB).
+  const double kMaxSamples = std::min(3.0 * double(enough) + 1e6, 4e6);
+  const std::size_t stride =
+      samples > kMaxSamples ? static_cast<std::size_t>(std::ceil(samples / kMaxSamples)) : 1;
+  knnocc::detail::FlatIndex seen;
+  auto add = [&](double x, double y, double z) {
+    const auto b = [&](double c) {
+      return static_cast<std::uint64_t>(std::floor(c / edge) + 1048576.0) & 0x1fffff;
+    };
+    bool inserted = false;
+    seen.find_or_insert((b(x) << 42) | (b(y) << 21) | b(z), 0, inserted);
+  };
+  for (std::size_t i = 0; i < pts.size() && seen.size() <= enough; i += stride) {
+    const P& p = pts[i];
+    const double l = length(p, full);
+    if (l < 0) continue;
+    if (!rays || full == 0) {
+      add(p.x, p.y, p.z);
+      continue;
+    }
+    const double ux = (double(p.x) - origin.x) / full, uy = (double(p.y) - origin.y) / full,
+                 uz = (double(p.z) - origin.z) / full;
+    for (double t = 0; t < l && seen.size() <= enough; t += edge)
+      add(origin.x + ux * t, origin.y + uy * t, origin.z + uz * t);
+    if (l == full) add(p.x, p.y, p.z);
+  }
+  return seen.size();
+}
+
+}  // namespace knnocc::cli

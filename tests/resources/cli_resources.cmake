@@ -1,0 +1,19 @@
+# The tool's resource and output probes (tests/resources/cli_resources.sh): outputs checked before
+# the work, written through unique temporaries, never replacing a device, removed on SIGTERM;
+# stdout write errors; threads; oversized headers; the memory limit.
+find_program(KNNOCC_BASH bash)
+if(TARGET knnocc_tool AND KNNOCC_BASH)
+  set(KNNOCC_RESOURCE_CASES
+    missing_output_dir same_output_twice empty_output_name output_is_folder
+    device_written_in_place user_tmp_untouched concurrent_writers stdout_full png_extension
+    sim_non_empty_folder sigterm_removes_temporaries threads_capped huge_ply_header
+    huge_pcd_header memory_far_rays memory_tiny_resolution memory_out_of_memory bad_memory_limit
+    missing_input velodyne_without_calib utf8_bom_accepted mixed_ids_name_the_file info_like_map)
+  foreach(_case IN LISTS KNNOCC_RESOURCE_CASES)
+    add_test(NAME cli.resources.${_case}
+      COMMAND "${KNNOCC_BASH}" "${CMAKE_CURRENT_LIST_DIR}/cli_resources.sh"
+              "$<TARGET_FILE:knnocc_tool>" "${CMAKE_BINARY_DIR}/cli_resources" ${_case})
+    set_tests_properties(cli.resources.${_case} PROPERTIES LABELS cli TIMEOUT 60
+      FAIL_REGULAR_EXPRESSION "FAIL:")
+  endforeach()
+endif()

@@ -1,0 +1,162 @@
+#!/usr/bin/env bash
+# Resource and output probes of the knnocc tool, one case per ctest test:
+#   cli_resources.sh TOOL WORK_DIR CASE
+# Each case builds its inputs, runs the tool as a user would and checks the exit status, the
+# one-line message and which files exist afterwards. Exit 0 = pass.
+set -u
+K=$1
+W=$2/$3
+CASE=$3
+rm -rf "$W" && mkdir -p "$W" && cd "$W" || exit 1
+printf '1 0 0\n0 2 0\n0 0 1.5\n' > p.xyz
+
+fail() { echo "FAIL: $*"; exit 1; }
+# expect RC REGEX cmd...: runs cmd, stderr must match REGEX (one line) and the status be RC.
+expect() {
+  local rc=$1 re=$2; shift 2
+  "$@" > out.txt 2> err.txt
+  local got=$?
+  echo "\$ $* -> $got"; cat err.txt
+  [ "$got" = "$rc" ] || fail "exit $got, expected $rc"
+  if [ -n "$re" ]; then grep -Eq -- "$re" err.txt || fail "stderr does not match: $re"; fi
+  [ "$rc" = 0 ] || [ "$(wc -l < err.txt)" -le 1 ] || fail "more than one line on stderr"
+}
+no_temporaries() { ! ls -a | grep -q '\.tmp-' || fail "temporary left behind: $(ls -a | grep '\.tmp-')"; }
+
+case "$CASE" in
+  missing_output_dir)  # fails before mapping: nothing written
+    expect 2 "missing_dir/a.bt: folder 'missing_dir' does not exist" \
+      "$K" map --input p.xyz --res 0.1 --out-voxels a.txt --out-bt missing_dir/a.bt
+    [ ! -e a.txt ] || fail "a.txt written although another output cannot be"
+    no_temporaries ;;
+  same_output_twice)
+    expect 2 "name the same file" "$K" map --input p.xyz --res 0.1 --out-voxels a.txt --out-ply ./a.txt
+    expect 2 "name the same file" "$K" track --input . --k 3 --out-stats f --out-s f
+    echo old > a.bt && ln -s a.bt link.bt
+    expect 2 "name the same file" "$K" map --input p.xyz --res 0.1 --out-bt a.bt --out-ot x.ot --out-png y.png --out-voxels link.bt
+    [ ! -e a.txt ] && [ ! -e f ] && [ "$(cat a.bt)" = old ] || fail "an output was written" ;;
+  empty_output_name)
+    expect 2 "--out-voxels needs a file name, got ''" "$K" map --input p.xyz --res 0.1 --out-voxels "" ;;
+  output_is_folder)
+    mkdir d
+    expect 2 "d: is a folder" "$K" map --input p.xyz --res 0.1 --out-voxels d ;;
+  device_written_in_place)  # /dev/null stays a device; a FIFO is written, not replaced
+    expect 0 "" "$K" map --input p.xyz --res 0.1 --out-voxels /dev/null --out-ply /dev/null
+    [ -c /dev/null ] || fail "/dev/null replaced"
+    mkfifo fifo
+    (wc -l < fifo > fifo_lines) &
+    expect 0 "" "$K" map --input p.xyz --res 0.1 --out-voxels fifo
+    wait
+    [ -p fifo ] || fail "FIFO replaced by a regular file"
+    [ "$(cat fifo_lines)" = 43 ] || fail "FIFO reader got $(cat fifo_lines) lines, expected 43"
+    no_temporaries ;;
+  user_tmp_untouched)  # a user's <target>.tmp is neither used nor removed
+    echo mine > victim.txt.tmp
+    expect 0 "" "$K" map --input p.xyz --res 0.1 --out-voxels victim.txt
+    [ "$(cat victim.txt.tmp)" = mine ] || fail "victim.txt.tmp changed"
+    [ "$(wc -l < victim.txt)" = 43 ] || fail "victim.txt incomplete"
+    no_temporaries ;;
+  concurrent_writers)  # two runs writing one path at once: a complete file, exit 0 both
+    "$K" map --input p.xyz --res 0.02 --out-voxels ref.txt > /dev/null || fail "reference run"
+    for i in 1 2 3 4; do "$K" map --input p.xyz --res 0.02 --out-voxels same.txt > /dev/null & done
+    for j in 1 2 3 4; do wait -n || fail "a concurrent run failed"; done
+    cmp -s ref.txt same.txt || fail "concurrent writers left a file unlike a single run's"
+    no_temporaries ;;
+  stdout_full)
+    [ -w /dev/full ] || { echo "SKIPPED: no /dev/full"; exit 0; }
+    "$K" map --input p.xyz --res 0.1 > /dev/full 2> err.txt; rc=$?; cat err.txt
+    [ $rc = 2 ] || fail "exit $rc with stdout on /dev/full"
+    grep -q "standard output: write failed" err.txt || fail "no message" ;;
+  png_extension)
+    expect 2 "--out-png .*ending in .png, got 'x.jpg'" "$K" map --input p.xyz --res 0.1 --out-png x.jpg ;;
+  sim_non_empty_folder)
+    mkdir old && touch old/keep
+    expect 2 "old: folder is not empty" "$K" sim --out old --keyframes 2
+    [ "$(ls old)" = keep ] || fail "old/ changed"
+    expect 2 "folder is not empty" "$K" demo --seeds 1 --out old
+    mkdir empty
+    expect 0 "" "$K" sim --out empty --keyframes 2
+    [ -f empty/poses.txt ] && [ -f empty/reference.txt ] || fail "sim did not fill the empty folder"
+    no_temporaries ;;
+  sigterm_removes_temporaries)  # SIGTERM mid-run: the staging folder is removed, no target made
+    "$K" sim --out big --keyframes 100000 > /dev/null 2>&1 &
+    pid=$!
+    for i in $(seq 50); do ls -a | grep -q 'big\.tmp-' && break; sleep 0.1; done
+    ls -a | grep -q 'big\.tmp-' || fail "no staging folder seen"
+    sleep 0.5
+    kill -TERM $pid; wait $pid; rc=$?
+    [ $rc = 143 ] || fail "exit $rc after SIGTERM, expected 143 (killed by the signal)"
+    [ ! -e big ] || fail "big/ exists after SIGTERM"
+    no_temporaries ;;
+  threads_capped)  # more threads than the machine has: capped with a note, the same map
+    "$K" map --input p.xyz --res 0.1 > one.txt || fail "one thread"
+    expect 0 "is more than the [0-9]+ hardware threads of this machine; using" \
+      timeout 60 "$K" map --input p.xyz --res 0.1 --threads 512
+    [ "$(cut -d' ' -f1-8 out.txt)" = "$(cut -d' ' -f1-8 one.txt)" ] || fail "a different map" ;;
+  huge_ply_header)  # 200,000 properties (4.5 MB of header): refused at once
+    { printf 'ply\nformat ascii 1.0\nelement vertex 1\n'; seq 200000 | sed 's/^/property uchar p/'
+      printf 'end_header\n'; } > huge.ply
+    expect 2 "huge.ply: PLY header is longer than 1 MiB" timeout 20 "$K" map --input huge.ply --res 0.1 ;;
+  huge_pcd_header)
+    { printf 'VERSION 0.7\nFIELDS x y z'; seq 200000 | sed 's/^/ f/' | tr -d '\n'; printf '\n'; } > huge.pcd
+    expect 2 "huge.pcd: PCD header is longer than 1 MiB" timeout 20 "$K" map --input huge.pcd --res 0.1 ;;
+  memory_far_rays)  # 20,000 rays to +-4 km at 1 m under a small limit: one line, nothing written
+    awk 'BEGIN { srand(1); for (i = 0; i < 20000; i++) printf "%f %f %f\n", 8000*rand()-4000, 8000*rand()-4000, 8000*rand()-4000 }' > far.xyz
+    expect 2 "far.xyz: its rays need more than [0-9]+ bricks .* --memory-limit 300 MB" \
+      timeout 30 "$K" map --input far.xyz --res 1 --memory-limit 300M --out-voxels far.txt
+    [ ! -e far.txt ] || fail "far.txt written"
+    # Past what the estimate can prove, the limit still holds: one line naming file and limit.
+    expect 2 "far.xyz: .*--memory-limit 1.0 GB" \
+      timeout 60 "$K" map --input far.xyz --res 1 --memory-limit 1G --out-voxels far.txt
+    [ ! -e far.txt ] || fail "far.txt written"
+    no_temporaries ;;
+  memory_tiny_resolution)  # a dense 2 m scan at 0.1 mm
+    awk 'BEGIN { srand(2); for (i = 0; i < 50000; i++) printf "%f %f %f\n", 3*rand()-1.5, 3*rand()-1.5, 1.5 }' > room.xyz
+    expect 2 "room.xyz: .*--memory-limit 500 MB" timeout 30 "$K" map --input room.xyz --res 0.0001 --memory-limit 500M ;;
+  memory_out_of_memory)  # a 4 MB compressed PCD that expands to 400 MB, under a 200 MB limit
+    python3 - <<'PY' || { echo "SKIPPED: no python3"; exit 0; }
+import struct
+n = 33_333_333; raw = n * 12
+body = bytearray(b"\x00\x00")  # one literal zero byte
+left = raw - 1
+while left >= 3:
+    ln = min(left, 264)
+    body += bytes([0xE0, ln - 9, 0x00]) if ln >= 9 else bytes([(ln - 2) << 5, 0x00])
+    left -= ln
+assert left == 0 or left < 3
+if left:
+    body += bytes([left - 1]) + b"\x00" * left
+head = ("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH %d\nHEIGHT 1\n"
+        "POINTS %d\nDATA binary_compressed\n" % (n, n)).encode()
+open("zeros.pcd", "wb").write(head + struct.pack("<II", len(body), raw) + bytes(body))
+PY
+    expect 2 "zeros.pcd: out of memory \(--memory-limit 200 MB\)" timeout 30 "$K" map --input zeros.pcd --res 0.1 --memory-limit 200M ;;
+  bad_memory_limit)
+    expect 2 "--memory-limit expects a size of at least 16M such as 800M or 4G, got '5'" \
+      "$K" map --input p.xyz --res 0.1 --memory-limit 5 ;;
+  missing_input)
+    expect 2 "/nonexistent: cannot open: No such file or directory" "$K" map --input /nonexistent --res 0.1 ;;
+  velodyne_without_calib)
+    mkdir -p kitti/velodyne && printf '1 0 0 0 0 1 0 0 0 0 1 0\n' > kitti/poses.txt
+    printf '\0\0\x80\x3f\0\0\0\0\0\0\0\0\0\0\0\0' > kitti/velodyne/000000.bin
+    expect 2 "kitti/calib.txt: missing: a velodyne/ sequence needs KITTI's calib.txt" \
+      "$K" map --input kitti --res 0.1 ;;
+  utf8_bom_accepted)
+    printf '\xef\xbb\xbf1 0 0\n0 2 0\n0 0 1.5\n' > bom.xyz
+    expect 0 "" "$K" map --input bom.xyz --res 0.1
+    grep -q "^clouds 1 points 3 " out.txt || fail "BOM file not read as 3 points" ;;
+  mixed_ids_name_the_file)
+    mkdir -p seq/clouds && printf '0 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n' > seq/poses.txt
+    printf 'ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty uint id\nend_header\n1 0 0 7\n' > seq/clouds/000000.ply
+    printf 'ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 0 0\n' > seq/clouds/000001.ply
+    expect 2 "seq/clouds/000001.ply: .*with and without ids" "$K" map --input seq --res 0.1 --model knn ;;
+  info_like_map)  # info refuses what map refuses: a 1e-9 m tree, a non-unit VIEWPOINT
+    printf '# Octomap OcTree binary file\nid OcTree\nsize 1\nres 1e-9\ndata\n\x00\x00' > tiny.bt
+    expect 2 "tiny.bt: resolution 1e-09 is below 0.0001" "$K" info tiny.bt
+    expect 2 "tiny.bt: resolution 1e-09 is below 0.0001" "$K" convert tiny.bt copy.bt
+    printf 'FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nVIEWPOINT 0 0 0 2 0 0 0\nDATA ascii\n1 0 0\n' > vp.pcd
+    expect 2 "vp.pcd: VIEWPOINT quaternion norm 2.000000 is not 1" "$K" map --input vp.pcd --res 0.1
+    expect 2 "vp.pcd: VIEWPOINT quaternion norm 2.000000 is not 1" "$K" info vp.pcd ;;
+  *) fail "unknown case $CASE" ;;
+esac
+echo PASS

@@ -85,7 +85,7 @@ inline OccupancyMap<OcKey> read_map(const Args& args, const std::string& path) {
   const double res = args.number("--res", 0.0);
   if (args.has("--res") && !(res >= 1e-4))
     throw UsageError("--res must be >= 0.0001, got " + args.str("--res"));
-  OccupancyMap<OcKey> map = tree ? io::read_octree(path) : read_voxel_map(path, res);
+  OccupancyMap<OcKey> map = tree ? read_tree_checked(path) : read_voxel_map(path, res);
   if (tree && args.has("--res") && map.grid().resolution() != res)
     throw io::Error(path, "the tree's resolution is " + std::to_string(map.grid().resolution()) +
                               ", not --res " + args.str("--res"));
@@ -150,21 +150,8 @@ inline int run_eval(const std::vector<std::string>& argv) {
   opt.ground_band = args.number("--ground-band", opt.ground_band);
   if (!(opt.inflate >= 0) || !(opt.ground_band >= 0))
     throw UsageError("--inflate and --ground-band must be >= 0");
-  const std::string ext = lower_extension(map_path);
-  const bool tree = ext == ".bt" || ext == ".ot";
-  if (!tree && !args.has("--res"))
-    throw UsageError("--res is required for a voxel list (the map's voxel size)");
-  const double res = args.number("--res", 0.0);
-  if (args.has("--res") && !(res >= 1e-4))
-    throw UsageError("--res must be >= 0.0001, got " + args.str("--res"));
-
   const eval::Reference ref = eval::read_reference(ref_path);
-  const OccupancyMap<OcKey> map =
-      tree ? read_tree_checked(map_path) : read_voxel_map(map_path, res);
-  if (tree && args.has("--res") && map.grid().resolution() != res)
-    throw io::Error(map_path, "the tree's resolution is " +
-                                  std::to_string(map.grid().resolution()) + ", not --res " +
-                                  args.str("--res"));
+  const OccupancyMap<OcKey> map = read_map(args, map_path);
   const eval::Metrics m = eval::evaluate(map, ref, opt);
   std::printf(
       "occupied %zu free %zu shell %zu in_shell %zu covered %zu irrelevant %zu evaluated %zu "

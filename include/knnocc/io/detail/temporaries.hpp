@@ -11,12 +11,15 @@
 #include <csignal>
 #include <cstddef>
 #include <cstdio>
+#include <cstring>
 
 #if defined(__unix__) || defined(__APPLE__)
-#include <dirent.h>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#if defined(__linux__)
+#include <sys/syscall.h>
+#endif
 #define KNNOCC_POSIX_FILES 1
 #else
 #define KNNOCC_POSIX_FILES 0
@@ -55,21 +58,35 @@ inline void unregister_temporary(int slot) noexcept {
 
 #if KNNOCC_POSIX_FILES
 /// Removes a staging folder and what it holds (depth bounded: the tool's folder outputs are at
-/// most three levels deep).
+/// most three levels deep). Async-signal-safe on Linux; elsewhere only files are removed here.
 inline void remove_tree_signal_safe(int parent_fd, const char* name, int depth) noexcept {
   if (unlinkat(parent_fd, name, 0) == 0 || depth > 4) return;
   const int fd = openat(parent_fd, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW);
   if (fd < 0) return;
-  // fdopendir/readdir may allocate; a handler has nothing better on POSIX. They are used only
-  // after a fatal signal, when the process is about to die anyway.
-  if (DIR* d = fdopendir(dup(fd))) {
-    while (const dirent* e = readdir(d)) {
-      const char* n = e->d_name;
-      if (n[0] == '.' && (n[1] == 0 || (n[1] == '.' && n[2] == 0))) continue;
-      remove_tree_signal_safe(fd, n, depth + 1);
+#if defined(__linux__)
+  // getdents64 straight from the kernel into a buffer on the stack: unlike fdopendir/readdir it
+  // allocates nothing, so it is safe in a handler that interrupted malloc. Entries are removed
+  // while the folder is read, so it is read again from the start until nothing is left.
+  alignas(8) char buf[2048];
+  for (int pass = 0; pass < 64; ++pass) {
+    lseek(fd, 0, SEEK_SET);
+    bool removed = false;
+    for (;;) {
+      const long n = syscall(SYS_getdents64, fd, buf, sizeof buf);
+      if (n <= 0) break;
+      for (long off = 0; off < n;) {
+        unsigned short reclen = 0;  // struct linux_dirent64: ino 8, off 8, reclen 2, type 1, name
+        std::memcpy(&reclen, buf + off + 16, sizeof reclen);
+        const char* entry = buf + off + 19;
+        off += reclen;
+        if (entry[0] == '.' && (entry[1] == 0 || (entry[1] == '.' && entry[2] == 0))) continue;
+        remove_tree_signal_safe(fd, entry, depth + 1);
+        removed = true;
+      }
     }
-    closedir(d);
+    if (!removed) break;
   }
+#endif
   close(fd);
   unlinkat(parent_fd, name, AT_REMOVEDIR);
 }

@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include <knnocc/core/memory_limit.hpp>
 #include <knnocc/live/live_mapper.hpp>
 #include <knnocc/mapper.hpp>
 #include <knnocc/sensor/knn_model.hpp>
@@ -253,6 +254,52 @@ TEST_CASE("live_mapper.bad_operations_change_nothing") {
   CHECK(live.map().num_voxels() == 0);
   live.add(2, b.pose, b.points, b.ids);
   check_against_scratch(live, KnnModel{}, MapperOptions{}, 0.1);
+}
+
+TEST_CASE_TEMPLATE("live_mapper.memory_limit_holds_through_rebuilds_and_replays", Model,
+                   OctoMapModel, KnnModel) {
+  test::Rng rng(13);
+  const Scene scene(rng, 12.0);
+  std::vector<Frame> frames;
+  for (int f = 0; f < 30; ++f) frames.push_back(make_frame(rng, scene, f, true));
+  LiveMapper<Model> unbounded(0.1);
+  for (int f = 0; f < 30; ++f) unbounded.add(f, frames[f].pose, frames[f].points, frames[f].ids);
+  const std::size_t full = unbounded.map().memory_usage();
+
+  // Room for the whole map: adds, a regional replay (OctoMap model) or a rebuild (k-NN) of a
+  // re-pose and a loop closure all fit, and the map equals the from-scratch one.
+  LiveMapper<Model> roomy(0.1);
+  roomy.set_memory_limit(4 * full);  // checks before growth are conservative
+  for (int f = 0; f < 30; ++f) roomy.add(f, frames[f].pose, frames[f].points, frames[f].ids);
+  roomy.repose({{28, perturbed(rng, frames[28].pose, 1.0)}});
+  check_against_scratch(roomy, Model{}, MapperOptions{}, 0.1);
+  std::vector<std::pair<std::uint64_t, RigidPose>> all;
+  for (int f = 0; f < 30; ++f) all.emplace_back(f, perturbed(rng, frames[f].pose, 0.5));
+  roomy.repose(all);
+  CHECK(roomy.last_update().rebuilt);
+  CHECK(roomy.map().memory_limit() == 4 * full);  // the rebuilt map keeps the limit
+  check_against_scratch(roomy, Model{}, MapperOptions{}, 0.1);
+
+  // Half of it: adding the keyframes stops at the limit.
+  LiveMapper<Model> tight(0.1);
+  tight.set_memory_limit(full / 2);
+  bool refused = false;
+  for (int f = 0; f < 30 && !refused; ++f) {
+    try {
+      tight.add(f, frames[f].pose, frames[f].points, frames[f].ids);
+    } catch (const MemoryLimitError&) {
+      refused = true;
+    }
+    CHECK(tight.map().memory_usage() <= full / 2);
+  }
+  CHECK(refused);
+
+  // A limit set on a full map binds the rebuild of a loop closure; raised, rebuild() recovers.
+  unbounded.set_memory_limit(full / 2);
+  CHECK_THROWS_AS(unbounded.repose(all), MemoryLimitError);
+  unbounded.set_memory_limit(0);
+  unbounded.rebuild();
+  check_against_scratch(unbounded, Model{}, MapperOptions{}, 0.1);
 }
 
 TEST_CASE("live_mapper.recent_repose_replays_only_nearby_keyframes") {

@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <new>
 #include <string>
 #include <utility>
 #include <vector>
@@ -30,6 +31,7 @@
 
 #include "args.hpp"
 #include "map_outputs.hpp"
+#include "resource_limits.hpp"
 #include "view_frame.hpp"
 
 namespace knnocc::cli {
@@ -102,42 +104,53 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
   const auto corrections = read_corrections(dir, source.size());
   LiveMapper<Model, OcKey, EigenPose> live(
       opt.res, model, MapperOptions{opt.max_range, opt.discretize, opt.threads, {}});
+  live.set_memory_limit(map_memory_share(opt.memory_limit));  // rebuilds and replays included
+  auto out_of_memory = [&](std::size_t i) {
+    char res_text[32];
+    std::snprintf(res_text, sizeof res_text, "%g", opt.res);
+    return io::Error(source.path(),
+                     "keyframe " + std::to_string(i) + ": out of memory (--memory-limit " +
+                         format_bytes(opt.memory_limit) + ") mapping or correcting at --res " +
+                         res_text + "; a higher --memory-limit, or a coarser --res or --crop");
+  };
   std::size_t points = 0, reposed = 0;
   std::vector<double> correction_ms;
   UpEstimator up_estimate;
-  for (std::size_t i = 0; i < source.size(); ++i) {
-    io::Scan scan = source.load(i);
-    up_estimate.add(scan.pose, scan.cloud.points);
-    std::vector<Point3f>& pts = scan.cloud.points;
-    std::vector<std::uint64_t>& ids = scan.cloud.ids;
-    if (crop > 0.0) {  // --crop: in the sensor frame, as the from-scratch path
-      std::size_t kept = 0;
-      for (std::size_t j = 0; j < pts.size(); ++j)
-        if (std::sqrt(double(pts[j].x) * pts[j].x + double(pts[j].y) * pts[j].y +
-                      double(pts[j].z) * pts[j].z) <= crop) {
-          if (!ids.empty()) ids[kept] = ids[j];
-          pts[kept++] = pts[j];
-        }
-      pts.resize(kept);
-      if (!ids.empty()) ids.resize(kept);
+  for (std::size_t i = 0; i < source.size(); ++i) try {
+      io::Scan scan = source.load(i);
+      up_estimate.add(scan.pose, scan.cloud.points);
+      std::vector<Point3f>& pts = scan.cloud.points;
+      std::vector<std::uint64_t>& ids = scan.cloud.ids;
+      if (crop > 0.0) {  // --crop: in the sensor frame, as the from-scratch path
+        std::size_t kept = 0;
+        for (std::size_t j = 0; j < pts.size(); ++j)
+          if (std::sqrt(double(pts[j].x) * pts[j].x + double(pts[j].y) * pts[j].y +
+                        double(pts[j].z) * pts[j].z) <= crop) {
+            if (!ids.empty()) ids[kept] = ids[j];
+            pts[kept++] = pts[j];
+          }
+        pts.resize(kept);
+        if (!ids.empty()) ids.resize(kept);
+      }
+      points += pts.size();
+      try {
+        live.add(i, EigenPose::from(scan.pose), std::move(pts), std::move(ids));
+      } catch (const std::invalid_argument& e) {
+        throw io::Error(source.path(), "scan " + std::to_string(i) + ": " + e.what());
+      }
+      const auto snapshot = corrections.find(i);
+      if (snapshot == corrections.end()) continue;
+      const auto a = std::chrono::steady_clock::now();
+      std::vector<std::pair<std::uint64_t, EigenPose>> poses;
+      for (std::size_t j = 0; j < snapshot->second.size(); ++j)
+        poses.emplace_back(j, EigenPose::from(snapshot->second[j]));
+      live.repose(poses);
+      reposed += live.last_update().changed;
+      correction_ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
+    } catch (const std::bad_alloc&) {  // MemoryLimitError included
+      throw out_of_memory(i);
     }
-    points += pts.size();
-    try {
-      live.add(i, EigenPose::from(scan.pose), std::move(pts), std::move(ids));
-    } catch (const std::invalid_argument& e) {
-      throw io::Error(source.path(), "scan " + std::to_string(i) + ": " + e.what());
-    }
-    const auto snapshot = corrections.find(i);
-    if (snapshot == corrections.end()) continue;
-    const auto a = std::chrono::steady_clock::now();
-    std::vector<std::pair<std::uint64_t, EigenPose>> poses;
-    for (std::size_t j = 0; j < snapshot->second.size(); ++j)
-      poses.emplace_back(j, EigenPose::from(snapshot->second[j]));
-    live.repose(poses);
-    reposed += live.last_update().changed;
-    correction_ms.push_back(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
-  }
   const auto& map = live.map();
   std::vector<std::string> written;
   if (!out_voxels.empty()) {

@@ -134,6 +134,12 @@ head = ("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH %
 open("zeros.pcd", "wb").write(head + struct.pack("<II", len(body), raw) + bytes(body))
 PY
     expect 2 "zeros.pcd: out of memory \(--memory-limit 200 MB\)" timeout 30 "$K" map --input zeros.pcd --res 0.1 --memory-limit 200M ;;
+  memory_corrections)  # the live mapper of --corrections holds the limit too
+    "$K" sim --out seq --seed 3 --keyframes 12 --drift 0.3 > /dev/null || fail "sim"
+    expect 2 "seq: keyframe [0-9]+: out of memory \(--memory-limit 64 MB\) mapping or correcting at --res 0.002" \
+      timeout 30 "$K" map --input seq --corrections seq/corrections --res 0.002 --memory-limit 64M --out-voxels c.txt
+    [ ! -e c.txt ] || fail "c.txt written"
+    no_temporaries ;;
   bad_memory_limit)
     expect 2 "--memory-limit expects a size of at least 16M such as 800M or 4G, got '5'" \
       "$K" map --input p.xyz --res 0.1 --memory-limit 5 ;;

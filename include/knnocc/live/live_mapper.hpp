@@ -92,6 +92,16 @@ class LiveMapper {
   /// Bytes held by the stored keyframes (the map's own memory: map().memory_usage()).
   std::size_t keyframe_memory() const { return store_.memory_usage(); }
 
+  /// Bounds the memory of the map (OccupancyMap::set_memory_limit; 0: no bound), now and of every
+  /// map built later: rebuilds and the scratch maps of regional replays. An operation that would
+  /// pass it throws MemoryLimitError; the keyframes then hold the operation's result but the map
+  /// may not: raise the limit and rebuild().
+  void set_memory_limit(std::size_t bytes) {
+    memory_limit_ = bytes;
+    mapper_->map().set_memory_limit(bytes);
+  }
+  std::size_t memory_limit() const { return memory_limit_; }
+
   /// Adds keyframe `id` (new id) seen from `pose`; `points` in the sensor frame; `ids` one
   /// map-point id per point or empty (k-NN model: a sequence gives ids always or never; the
   /// OctoMap model ignores them). std::invalid_argument, with nothing changed, on a known id, a
@@ -183,6 +193,7 @@ class LiveMapper {
   /// Builds the map (and tracker) again from scratch over the current keyframes.
   void rebuild() {
     auto fresh = std::make_unique<mapper_type>(resolution_, model_, options_);
+    fresh->map().set_memory_limit(memory_limit_);
     for (std::size_t i = 0; i < store_.size(); ++i) {
       to_world(store_[i]);
       if constexpr (!uses_map_cloud) store_[i].reach = reach();
@@ -247,6 +258,7 @@ class LiveMapper {
         all.hi[a] = std::max(all.hi[a], r.hi[a]);
       }
     mapper_type scratch(resolution_, model_, options_);
+    scratch.map().set_memory_limit(memory_limit_);
     for (const std::size_t i : candidates) {
       to_world(store_[i]);
       // Only rays that can reach the region: the others change none of its voxels (one update
@@ -312,6 +324,7 @@ class LiveMapper {
   Model model_;
   MapperOptions options_;
   std::unique_ptr<mapper_type> mapper_;
+  std::size_t memory_limit_ = 0;  // 0: none
   KeyframeStore<Pose> store_;
   std::size_t with_ids_ = 0, without_ids_ = 0;  // keyframes with points, by kind (k-NN model)
   LiveUpdate last_;

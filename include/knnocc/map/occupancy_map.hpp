@@ -425,6 +425,7 @@ class OccupancyMap {
       slot = brick_slot(coord);
     }
     Brick& b = bricks_[slot];
+    if (memory_limit_ && any && src->values && !b.values) check_growth(pool_.growth_bytes());
     known_count_ -= static_cast<std::size_t>(b.known.count());
     if (!any) {
       b.known.clear();

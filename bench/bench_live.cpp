@@ -15,7 +15,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -24,6 +23,7 @@
 
 #include <knnocc/io/sequence.hpp>
 #include <knnocc/live/live_mapper.hpp>
+#include <knnocc/map/same_voxels.hpp>
 #include <knnocc/mapper.hpp>
 #include <knnocc/sensor/knn_model.hpp>
 #include <knnocc/sim/drift.hpp>
@@ -40,17 +40,6 @@ double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
-}
-
-template <class Map>
-bool same_voxels(const Map& a, const Map& b) {
-  if (a.num_voxels() != b.num_voxels()) return false;
-  bool same = true;
-  a.for_each_voxel([&](const auto& k, float v) {
-    const auto w = b.logodds(k);
-    same = same && w && std::memcmp(&v, &*w, sizeof v) == 0;
-  });
-  return same;
 }
 
 // A from-scratch Mapper over the live mapper's keyframes, compared with it.

@@ -11,7 +11,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -21,6 +20,7 @@
 #include <knnocc/eval/metrics.hpp>
 #include <knnocc/io/octomap_tree.hpp>
 #include <knnocc/live/live_mapper.hpp>
+#include <knnocc/map/same_voxels.hpp>
 #include <knnocc/mapper.hpp>
 #include <knnocc/sensor/knn_model.hpp>
 #include <knnocc/sim/drift.hpp>
@@ -48,17 +48,6 @@ and the time each correction took. --out DIR also writes <model>_<map>.png and .
 }
 
 namespace loop_demo {
-
-template <class Map>
-bool same_voxels(const Map& a, const Map& b) {
-  if (a.num_voxels() != b.num_voxels()) return false;
-  bool same = true;
-  a.for_each_voxel([&](const auto& k, float v) {
-    const auto w = b.logodds(k);
-    same = same && w && std::memcmp(&v, &*w, sizeof v) == 0;
-  });
-  return same;
-}
 
 struct Correction {
   std::size_t after = 0, changed = 0, replayed = 0;

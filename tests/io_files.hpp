@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the io/ tests: a scratch folder per test case, byte-level file writing, the
-// message of a thrown io::Error, and a point set with the float edge cases.
+// message of a thrown io::Error, and a point set with the float edge cases. `using namespace
+// knnocc::test::io_files;` also brings io, fs, Point3f and test_support's file helpers.
 
 #include <doctest/doctest.h>
 
@@ -30,6 +31,9 @@ namespace knnocc::test::io_files {
 namespace io = knnocc::io;
 namespace fs = std::filesystem;
 using knnocc::Point3f;
+using knnocc::test::append_le;
+using knnocc::test::read_file;
+using knnocc::test::write_file;
 
 // A fresh directory per test case, unique per process so parallel runs (two compilers, ctest -j)
 // never share files; removed on scope exit.

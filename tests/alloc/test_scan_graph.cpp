@@ -27,14 +27,7 @@
 #include <octomap/ScanGraph.h>
 #endif
 
-namespace io = knnocc::io;
-namespace fs = std::filesystem;
-using knnocc::Point3f;
-
-using knnocc::test::append_le;
-using knnocc::test::read_file;
-using knnocc::test::write_file;
-using namespace knnocc::test::io_files;
+using namespace knnocc::test::io_files;  // io, fs, Point3f, file helpers
 
 namespace {
 

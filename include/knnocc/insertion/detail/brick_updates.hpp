@@ -141,19 +141,24 @@ void gather_hashed(ThreadScratches& scratch, unsigned threads, std::vector<std::
 /// Creates the missing map bricks in group order (serially: the map's value pool is serial), then
 /// updates every touched voxel once, occupied first: hit voxels get values.hit (unless rated),
 /// miss voxels that are not hits get values.miss. Groups are updated by the team's threads in
-/// turn. Returns the voxels updated (occupied: hit updates,
-/// not counting rated ones; free: miss updates).
+/// turn. A brick gets its value array in the serial part unless it has no known voxel and this
+/// scan gives it one non-empty mask (only hits or only misses): update_brick then leaves it
+/// uniform, without an array (sparse long rays), touching nothing but the brick. Returns the
+/// voxels updated (occupied: hit updates, not counting rated ones; free: miss updates).
 template <class Key>
 UpdateCounts apply_updates(OccupancyMap<Key>& map, BrickGroups& bricks, const ScanValues& values,
                            Team& team, ThreadScratches& scratch) {
   if (map.num_bricks() == 0) map.reserve_bricks(bricks.bricks());  // a fresh map: all are new
+  const bool hits_here = !values.rated;  // rated hits carry their own sums
   for (std::size_t g = 0; g < bricks.count; ++g)
     for (BrickUpdate& u : bricks.groups[g]) {
       u.slot = map.brick_slot(u.coord);
-      map.prepare_values(map.brick_at(u.slot));
       for (std::size_t i = 0; i < u.miss.w.size(); ++i) u.miss.w[i] &= ~u.hit.w[i];  // hit wins
+      auto& brick = map.brick_at(u.slot);
+      const int masks = int(hits_here && u.hit.any()) + int(u.miss.any());
+      if (masks > 1 || brick.known.any() || map.change_detection_enabled())
+        map.prepare_values(brick);
     }
-  const bool hits_here = !values.rated;  // rated hits carry their own sums
   UpdateCounts total;
   if (map.change_detection_enabled()) {  // records per voxel, in one thread
     for (std::size_t g = 0; g < bricks.count; ++g)

@@ -240,3 +240,42 @@ TEST_CASE("insert_threads.sparse_rays_leave_uniform_bricks") {
     }
   }
 }
+
+TEST_CASE("insert_threads.memory_limit_covers_the_scratch") {
+  // Long sparse rays touch about 2 M bricks: their hashed scratch alone (about 140 bytes a
+  // brick and thread) is far above a 48 MB map limit, which now bounds map and scratch together:
+  // the scan is refused with MemoryLimitError and neither grew past the limit. Under a limit
+  // that holds the scan, the map is the one built without a limit.
+  knnocc::test::Rng rng(43);
+  std::uniform_real_distribution<float> far(-400.f, 400.f), near(-20.f, 20.f);
+  std::vector<Scan> big(1), small(1);
+  big[0].origin = small[0].origin = {0.013f, -0.021f, 0.034f};
+  for (int i = 0; i < 3000; ++i) big[0].points.push_back({far(rng), far(rng), far(rng)});
+  for (int i = 0; i < 3000; ++i) small[0].points.push_back({near(rng), near(rng), near(rng)});
+  constexpr std::size_t kLimit = std::size_t{48} << 20;
+  for (const unsigned threads : {1u, 2u, 3u}) {
+    CAPTURE(threads);
+    OccupancyMap<OcKey> map(0.1);
+    map.set_memory_limit(kLimit);
+    knnocc::ScanInserter<OcKey> inserter(map, {}, threads);
+    CHECK_THROWS_AS(inserter.insert_point_cloud(big[0].origin, big[0].points),
+                    knnocc::MemoryLimitError);
+    CHECK(map.memory_usage() + inserter.memory_usage() <= kLimit);
+    CHECK(map.memory_limit() == kLimit);  // restored after the refusal
+  }
+  const auto unlimited = insert<OcKey>(small, 0.1, 1, kDefaultLimit);
+  for (const unsigned threads : {1u, 3u}) {
+    CAPTURE(threads);
+    for (const std::size_t scratch : {std::size_t{0}, kDefaultLimit}) {
+      OccupancyMap<OcKey> map(0.1);
+      map.set_memory_limit(kLimit);
+      knnocc::ScanInserter<OcKey> inserter(map, {}, threads);
+      inserter.set_scratch_limit(scratch);
+      inserter.insert_point_cloud(small[0].origin, small[0].points);
+      CHECK(map.memory_usage() + inserter.memory_usage() <= kLimit);
+      Outcome<OcKey> out;
+      map.for_each_voxel([&](const OcKey& k, float v) { out.voxels.emplace_back(k.pack(), v); });
+      CHECK(out.voxels == unlimited.voxels);
+    }
+  }
+}

@@ -43,6 +43,11 @@ struct BrickGroups {
     for (std::size_t g = 0; g < count; ++g) n += groups[g].size();
     return n;
   }
+  std::size_t memory_usage() const {
+    std::size_t bytes = groups.capacity() * sizeof(groups[0]);
+    for (const auto& g : groups) bytes += g.capacity() * sizeof(BrickUpdate);
+    return bytes;
+  }
 };
 
 /// The log-odds a scan applies: `hit` to endpoint voxels (unless the hits are rated, each voxel
@@ -111,15 +116,31 @@ void gather_dense(Team& team, ThreadScratches& scratch, BrickGroups& out) {
 
 /// Gathers the hashed scratch into `out` (groups of 256 bricks in z, y, x order), leaving every
 /// scratch empty: the other threads' miss masks are OR-ed into the first thread's, whose bricks
-/// hold the hits. `order` is scratch.
+/// hold the hits. `order` is scratch. With a memory limit (`limit` > 0; `elsewhere`: the bytes
+/// counted against it outside the threads' hashed scratch, `order` and `out`) the first thread's
+/// scratch may grow to what the others leave, and the groups are refused (MemoryLimitError)
+/// before they are made when they would pass it.
 template <class Key>
 void gather_hashed(ThreadScratches& scratch, unsigned threads, std::vector<std::uint32_t>& order,
-                   BrickGroups& out) {
+                   BrickGroups& out, std::size_t limit = 0, std::size_t elsewhere = 0) {
   using layout = BrickLayout<Key>;
   HashedMarks& first = scratch[0]->hashed;
+  if (limit) {
+    std::size_t held = elsewhere + order.capacity() * sizeof(std::uint32_t) + out.memory_usage();
+    for (unsigned t = 1; t < threads; ++t) held += scratch[t]->hashed.memory_usage();
+    first.set_cap(limit > held ? limit - held : 1, limit, held);
+  }
   for (unsigned t = 1; t < threads; ++t) {
     first.merge_misses(scratch[t]->hashed);
     scratch[t]->hashed.clear();
+  }
+  if (limit) {  // the groups and the order: what they add to what is held
+    std::size_t held = elsewhere + out.memory_usage();
+    for (unsigned t = 0; t < threads; ++t) held += scratch[t]->hashed.memory_usage();
+    const std::size_t n = first.size();
+    std::size_t more = n * sizeof(BrickUpdate);
+    if (order.capacity() < n) more += 2 * n * sizeof(std::uint32_t);
+    if (held + more > limit) memory_limit_exceeded(limit, held + more);
   }
   order.clear();
   for (std::size_t j = 0; j < first.size(); ++j) order.push_back(static_cast<std::uint32_t>(j));

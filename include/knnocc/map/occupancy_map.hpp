@@ -302,8 +302,9 @@ class OccupancyMap {
   /// or value array whose storage would take memory_usage() past the limit reports
   /// MemoryLimitError (core/memory_limit.hpp: a std::bad_alloc; without exceptions a message and
   /// abort()) before allocating it. What was written before stays; a whole-scan insertion
-  /// (ScanInserter) refused midway may have applied part of the scan. compact() and the change
-  /// set are not bounded (compact() needs at most the value arrays once more, then frees them).
+  /// (ScanInserter) refused midway may have applied part of the scan; ScanInserter counts its
+  /// scratch against the same limit (ScanInserter::memory_usage). compact() and the change set
+  /// are not bounded (compact() needs at most the value arrays once more, then frees them).
   void set_memory_limit(std::size_t bytes) { memory_limit_ = bytes; }
   std::size_t memory_limit() const { return memory_limit_; }
 

@@ -309,11 +309,13 @@ TEST_CASE("map.memory_limit_bounds_a_whole_scan") {
                   knnocc::MemoryLimitError);
   CHECK(limited.memory_usage() <= (std::size_t{1} << 20));
   OccupancyMap<OcKey> unlimited(0.05);
-  knnocc::insert_point_cloud(unlimited, knnocc::Point3f{0, 0, 0}, pts);
+  knnocc::ScanInserter<OcKey> inserter(unlimited);
+  inserter.insert_point_cloud(knnocc::Point3f{0, 0, 0}, pts);
   CHECK(unlimited.memory_usage() > (std::size_t{1} << 20));
-  // A limit above what the scan needs changes nothing.
+  // A limit above what the scan needs (the map and the inserter's scratch: the limit covers
+  // both) changes nothing.
   OccupancyMap<OcKey> roomy(0.05);
-  roomy.set_memory_limit(2 * unlimited.memory_usage());
+  roomy.set_memory_limit(2 * (unlimited.memory_usage() + inserter.memory_usage()));
   knnocc::insert_point_cloud(roomy, knnocc::Point3f{0, 0, 0}, pts);
   CHECK(roomy.num_voxels() == unlimited.num_voxels());
 }

@@ -3,6 +3,7 @@
 // byte marks. (The insert_threads.* cases also run under ThreadSanitizer: ctest -R tsan.)
 #include <doctest/doctest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -178,5 +179,103 @@ TEST_CASE("insert_threads.byte_marks_build_the_same_map") {
     CAPTURE(threads);
     CHECK(run(threads, kDefaultLimit, false, true) == bytes);
     CHECK(run(threads, kDefaultLimit, true, true) == bytes);
+  }
+}
+
+TEST_CASE("insert_threads.sparse_rays_leave_uniform_bricks") {
+  // Long sparse rays (hashed scratch) leave many bricks that one scan only misses, and solid
+  // blocks of endpoints filling whole bricks leave bricks that it only hits (their misses are
+  // hits too): such a new brick takes its one update as a uniform brick, without a value array,
+  // in whichever thread updates it. The map must not depend on the thread count (a value array
+  // allocated from a worker thread, or two bricks sharing one, would change it).
+  knnocc::test::Rng rng(41);
+  std::uniform_real_distribution<float> far(-40.f, 40.f);
+  std::uniform_int_distribution<int> block(-60, 60);
+  const double res = 0.1;
+  std::vector<Scan> scans(2);
+  std::vector<std::uint64_t> solid;  // packed coordinates of the bricks filled with endpoints
+  for (std::size_t s = 0; s < scans.size(); ++s) {
+    scans[s].origin = {0.013f + 0.3f * static_cast<float>(s), -0.021f, 0.034f};
+    for (int i = 0; i < 600; ++i) scans[s].points.push_back({far(rng), far(rng), far(rng)});
+    for (int c = 0; c < 300; ++c) {  // a brick 5.6-6.4 m away (1 brick = 8 voxels = 0.8 m)
+      std::array<int, 3> b{block(rng) / 10, block(rng) / 10, block(rng) / 10};
+      b[static_cast<std::size_t>(c % 3)] = c % 2 ? 7 : -8;
+      for (int i = 0; i < knnocc::kBrickVoxels; ++i) {
+        const int x = i % 8, y = i / 8 % 8, z = i / 64;
+        scans[s].points.push_back({static_cast<float>(((b[0] * 8 + x) + 0.5) * res),
+                                   static_cast<float>(((b[1] * 8 + y) + 0.5) * res),
+                                   static_cast<float>(((b[2] * 8 + z) + 0.5) * res)});
+      }
+      if (s == 0)
+        solid.push_back(knnocc::BrickLayout<OcKey>::brick_of(
+            OcKey{static_cast<std::uint16_t>(b[0] * 8 + 32768),
+                  static_cast<std::uint16_t>(b[1] * 8 + 32768),
+                  static_cast<std::uint16_t>(b[2] * 8 + 32768)}));
+    }
+  }
+  for (const std::size_t limit : {std::size_t{0}, kDefaultLimit}) {
+    CAPTURE(limit);
+    // After the first scan: the solid bricks are uniform (every voxel a hit) and most of the
+    // bricks the rays cross have no value array either.
+    OccupancyMap<OcKey> map(res);
+    knnocc::ScanInserter<OcKey> inserter(map, {}, 3);
+    inserter.set_scratch_limit(limit);
+    inserter.insert_point_cloud(scans[0].origin, scans[0].points);
+    std::size_t uniform = 0;
+    for (const auto& b : map.bricks()) uniform += b.values == nullptr && b.known.any();
+    CHECK(uniform > map.num_bricks() / 2);
+    for (const std::uint64_t coord : solid) {
+      const auto* b = map.find_brick(coord);
+      REQUIRE(b != nullptr);
+      CHECK(b->values == nullptr);
+      CHECK(b->known.count() == knnocc::kBrickVoxels);
+      CHECK(b->uniform == knnocc::OctoMapModel{}.hit);
+    }
+    // Both scans (the second updates uniform bricks again): the same map for any thread count.
+    const auto one = insert<OcKey>(scans, res, 1, limit);
+    REQUIRE(one.voxels.size() > 100000);
+    for (const unsigned threads : {2u, 3u, 4u, 8u}) {
+      CAPTURE(threads);
+      CHECK(insert<OcKey>(scans, res, threads, limit) == one);
+    }
+  }
+}
+
+TEST_CASE("insert_threads.memory_limit_covers_the_scratch") {
+  // Long sparse rays touch about 2 M bricks: their hashed scratch alone (about 140 bytes a
+  // brick and thread) is far above a 48 MB map limit, which now bounds map and scratch together:
+  // the scan is refused with MemoryLimitError and neither grew past the limit. Under a limit
+  // that holds the scan, the map is the one built without a limit.
+  knnocc::test::Rng rng(43);
+  std::uniform_real_distribution<float> far(-400.f, 400.f), near(-20.f, 20.f);
+  std::vector<Scan> big(1), small(1);
+  big[0].origin = small[0].origin = {0.013f, -0.021f, 0.034f};
+  for (int i = 0; i < 3000; ++i) big[0].points.push_back({far(rng), far(rng), far(rng)});
+  for (int i = 0; i < 3000; ++i) small[0].points.push_back({near(rng), near(rng), near(rng)});
+  constexpr std::size_t kLimit = std::size_t{48} << 20;
+  for (const unsigned threads : {1u, 2u, 3u}) {
+    CAPTURE(threads);
+    OccupancyMap<OcKey> map(0.1);
+    map.set_memory_limit(kLimit);
+    knnocc::ScanInserter<OcKey> inserter(map, {}, threads);
+    CHECK_THROWS_AS(inserter.insert_point_cloud(big[0].origin, big[0].points),
+                    knnocc::MemoryLimitError);
+    CHECK(map.memory_usage() + inserter.memory_usage() <= kLimit);
+    CHECK(map.memory_limit() == kLimit);  // restored after the refusal
+  }
+  const auto unlimited = insert<OcKey>(small, 0.1, 1, kDefaultLimit);
+  for (const unsigned threads : {1u, 3u}) {
+    CAPTURE(threads);
+    for (const std::size_t scratch : {std::size_t{0}, kDefaultLimit}) {
+      OccupancyMap<OcKey> map(0.1);
+      map.set_memory_limit(kLimit);
+      knnocc::ScanInserter<OcKey> inserter(map, {}, threads);
+      inserter.set_scratch_limit(scratch);
+      inserter.insert_point_cloud(small[0].origin, small[0].points);
+      CHECK(map.memory_usage() + inserter.memory_usage() <= kLimit);
+      Outcome<OcKey> out;
+      map.for_each_voxel([&](const OcKey& k, float v) { out.voxels.emplace_back(k.pack(), v); });
+      CHECK(out.voxels == unlimited.voxels);
+    }
   }
 }

@@ -108,6 +108,13 @@ class ScanInserter {
   void set_scratch_limit(std::size_t bytes) { scratch_limit_ = bytes; }
   std::size_t scratch_limit() const { return scratch_limit_; }
 
+  /// Bytes of the scratch that grows with the bricks a scan touches (hashed scratch, brick
+  /// groups), kept between scans. Under the map's memory limit (OccupancyMap::set_memory_limit)
+  /// this scratch and the map share the limit: a scan whose scratch would take the two past it
+  /// reports MemoryLimitError before allocating, and the dense scratch takes at most half of
+  /// the room the map leaves (scratch_limit() still bounds it).
+  std::size_t memory_usage() const { return apply_scratch_bytes(); }
+
   /// Inserts one scan of world-frame points seen from `origin`. max_range < 0: no limit;
   /// max_range == 0 or NaN is rejected (std::invalid_argument; abort without exceptions).
   template <class Points, class Origin>
@@ -234,8 +241,13 @@ class ScanInserter {
                       const detail::ScanValues& values, ScanStats& st) {
     if (scan.hits == 0 && scan.rays == 0) return;
     detail::RayChunks rays(scratch_, threads(), scan.rays, first_chunk_);
+    // Under a map memory limit the dense scratch takes at most half of the room the map leaves.
+    const std::size_t limit = map_->memory_limit(), in_map = map_->memory_usage();
+    const std::size_t dense_limit =
+        limit ? std::min(scratch_limit_, limit > in_map ? (limit - in_map) / 2 : 0)
+              : scratch_limit_;
     if (const auto box =
-            detail::plan_dense_box<Key>(scan.box, scan.steps, scratch_limit_, threads())) {
+            detail::plan_dense_box<Key>(scan.box, scan.steps, dense_limit, threads())) {
       st.byte_marks = box->byte_marks;
       prepare_dense(*box);
       const detail::RayFan fan = dense_fan(o, *box);
@@ -250,12 +262,43 @@ class ScanInserter {
       add_visits(st);
       detail::gather_dense<Key>(team_, scratch_, bricks_);
     } else {
+      // The threads' hashed scratch shares the room the map leaves under its limit.
+      const std::size_t elsewhere =
+          in_map + bricks_.memory_usage() + order_.capacity() * sizeof(std::uint32_t);
+      if (limit && elsewhere >= limit) detail::memory_limit_exceeded(limit, elsewhere);
+      for (unsigned t = 0; t < threads(); ++t)
+        scratch(t).hashed.set_cap(limit ? (limit - elsewhere) / threads() : 0, limit, elsewhere);
       walk_hashed(o, rays);
       add_visits(st);
-      detail::gather_hashed<Key>(scratch_, threads(), order_, bricks_);
+      detail::gather_hashed<Key>(scratch_, threads(), order_, bricks_, limit, in_map);
     }
     apply(values, st);
   }
+
+  // The inserter's own memory held through the apply (hashed scratch, brick groups, order).
+  std::size_t apply_scratch_bytes() const {
+    std::size_t bytes = bricks_.memory_usage() + order_.capacity() * sizeof(std::uint32_t);
+    for (unsigned t = 0; t < threads(); ++t) bytes += scratch_[t]->hashed.memory_usage();
+    return bytes;
+  }
+
+  // Lowers the map's memory limit by the inserter's scratch while the scan is applied (the limit
+  // covers both), and restores it.
+  class ScratchCounted {
+   public:
+    ScratchCounted(map_type& map, std::size_t scratch) : map_(map), limit_(map.memory_limit()) {
+      if (!limit_) return;
+      if (scratch >= limit_) detail::memory_limit_exceeded(limit_, map.memory_usage() + scratch);
+      map.set_memory_limit(limit_ - scratch);
+    }
+    ~ScratchCounted() { map_.set_memory_limit(limit_); }
+    ScratchCounted(const ScratchCounted&) = delete;
+    ScratchCounted& operator=(const ScratchCounted&) = delete;
+
+   private:
+    map_type& map_;
+    std::size_t limit_;
+  };
 
   void add_visits(ScanStats& st) {
     for (unsigned t = 0; t < threads(); ++t) st.ray_keys += scratch(t).visits;
@@ -325,6 +368,7 @@ class ScanInserter {
   }
 
   void apply(const detail::ScanValues& values, ScanStats& st) {
+    const ScratchCounted counted(*map_, apply_scratch_bytes());
     const detail::UpdateCounts c = detail::apply_updates(*map_, bricks_, values, team_, scratch_);
     st.occupied_voxels += c.occupied;
     st.free_voxels += c.free;

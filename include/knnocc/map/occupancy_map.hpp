@@ -302,8 +302,9 @@ class OccupancyMap {
   /// or value array whose storage would take memory_usage() past the limit reports
   /// MemoryLimitError (core/memory_limit.hpp: a std::bad_alloc; without exceptions a message and
   /// abort()) before allocating it. What was written before stays; a whole-scan insertion
-  /// (ScanInserter) refused midway may have applied part of the scan. compact() and the change
-  /// set are not bounded (compact() needs at most the value arrays once more, then frees them).
+  /// (ScanInserter) refused midway may have applied part of the scan; ScanInserter counts its
+  /// scratch against the same limit (ScanInserter::memory_usage). compact() and the change set
+  /// are not bounded (compact() needs at most the value arrays once more, then frees them).
   void set_memory_limit(std::size_t bytes) { memory_limit_ = bytes; }
   std::size_t memory_limit() const { return memory_limit_; }
 
@@ -363,7 +364,7 @@ class OccupancyMap {
       std::size_t grow = index_.growth_bytes(need);
       if (bricks_.capacity() < need)
         grow += (std::max(need, 2 * bricks_.capacity()) - bricks_.capacity()) * sizeof(Brick);
-      check_growth(grow + more * ValuePool::kArrayBytes);
+      check_growth(grow);  // value arrays are checked one by one (prepare_values)
     }
     if (bricks_.capacity() < need) bricks_.reserve(std::max(need, 2 * bricks_.capacity()));
     index_.reserve(need);
@@ -392,10 +393,25 @@ class OccupancyMap {
 
   /// update_voxel(b, i, delta) for every voxel i in `mask`, without change detection (callers
   /// check change_detection_enabled()) and without the map's voxel count: returns the number of
-  /// voxels that became known, for add_known(). Once `b` has its value array (prepare_values) it
-  /// touches nothing but `b`, so different bricks may be updated from different threads at once.
+  /// voxels that became known, for add_known(). An empty mask never touches `b`. A brick with no
+  /// known voxel and no value array (new) takes a non-empty mask as a uniform brick, as compact()
+  /// would leave it: every voxel of `mask` gets clamp(0 + delta), bit for bit what the array
+  /// would hold, and no array is allocated (sparse rays touch a few voxels of many bricks). Any
+  /// other brick without an array (compacted, or made uniform by an earlier update) gets it here
+  /// (prepare_values), which is serial.
+  /// Threads: update_brick touches nothing but `b` (so different bricks may be updated from
+  /// different threads at once) when `b` has its value array, or has no known voxel and gets
+  /// this one non-empty update before its next prepare_values(): a writer that updates bricks
+  /// from several threads calls prepare_values first for every brick that has known voxels or
+  /// will get more than one non-empty mask.
   std::size_t update_brick(Brick& b, const VoxelMask& mask, float delta) {
-    prepare_values(b);  // a compacted (or new, empty) brick: give it its value array first
+    if (!mask.any()) return 0;
+    if (!b.values && !b.known.any()) {  // new: one update leaves it uniform
+      b.uniform = clamp(0.0f + delta);
+      b.known = mask;
+      return static_cast<std::size_t>(mask.count());
+    }
+    prepare_values(b);  // compacted or uniform: give it its value array first
     const detail::ValueUpdate u{delta, clamp(0.0f + delta), params_.clamp_min, params_.clamp_max};
 #if KNNOCC_AVX2_LANES
     if (detail::cpu_has_avx2())  // the same updates, eight voxels at a time

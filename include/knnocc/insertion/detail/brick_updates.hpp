@@ -43,6 +43,11 @@ struct BrickGroups {
     for (std::size_t g = 0; g < count; ++g) n += groups[g].size();
     return n;
   }
+  std::size_t memory_usage() const {
+    std::size_t bytes = groups.capacity() * sizeof(groups[0]);
+    for (const auto& g : groups) bytes += g.capacity() * sizeof(BrickUpdate);
+    return bytes;
+  }
 };
 
 /// The log-odds a scan applies: `hit` to endpoint voxels (unless the hits are rated, each voxel
@@ -111,15 +116,31 @@ void gather_dense(Team& team, ThreadScratches& scratch, BrickGroups& out) {
 
 /// Gathers the hashed scratch into `out` (groups of 256 bricks in z, y, x order), leaving every
 /// scratch empty: the other threads' miss masks are OR-ed into the first thread's, whose bricks
-/// hold the hits. `order` is scratch.
+/// hold the hits. `order` is scratch. With a memory limit (`limit` > 0; `elsewhere`: the bytes
+/// counted against it outside the threads' hashed scratch, `order` and `out`) the first thread's
+/// scratch may grow to what the others leave, and the groups are refused (MemoryLimitError)
+/// before they are made when they would pass it.
 template <class Key>
 void gather_hashed(ThreadScratches& scratch, unsigned threads, std::vector<std::uint32_t>& order,
-                   BrickGroups& out) {
+                   BrickGroups& out, std::size_t limit = 0, std::size_t elsewhere = 0) {
   using layout = BrickLayout<Key>;
   HashedMarks& first = scratch[0]->hashed;
+  if (limit) {
+    std::size_t held = elsewhere + order.capacity() * sizeof(std::uint32_t) + out.memory_usage();
+    for (unsigned t = 1; t < threads; ++t) held += scratch[t]->hashed.memory_usage();
+    first.set_cap(limit > held ? limit - held : 1, limit, held);
+  }
   for (unsigned t = 1; t < threads; ++t) {
     first.merge_misses(scratch[t]->hashed);
     scratch[t]->hashed.clear();
+  }
+  if (limit) {  // the groups and the order: what they add to what is held
+    std::size_t held = elsewhere + out.memory_usage();
+    for (unsigned t = 0; t < threads; ++t) held += scratch[t]->hashed.memory_usage();
+    const std::size_t n = first.size();
+    std::size_t more = n * sizeof(BrickUpdate);
+    if (order.capacity() < n) more += 2 * n * sizeof(std::uint32_t);
+    if (held + more > limit) memory_limit_exceeded(limit, held + more);
   }
   order.clear();
   for (std::size_t j = 0; j < first.size(); ++j) order.push_back(static_cast<std::uint32_t>(j));
@@ -141,19 +162,24 @@ void gather_hashed(ThreadScratches& scratch, unsigned threads, std::vector<std::
 /// Creates the missing map bricks in group order (serially: the map's value pool is serial), then
 /// updates every touched voxel once, occupied first: hit voxels get values.hit (unless rated),
 /// miss voxels that are not hits get values.miss. Groups are updated by the team's threads in
-/// turn. Returns the voxels updated (occupied: hit updates,
-/// not counting rated ones; free: miss updates).
+/// turn. A brick gets its value array in the serial part unless it has no known voxel and this
+/// scan gives it one non-empty mask (only hits or only misses): update_brick then leaves it
+/// uniform, without an array (sparse long rays), touching nothing but the brick. Returns the
+/// voxels updated (occupied: hit updates, not counting rated ones; free: miss updates).
 template <class Key>
 UpdateCounts apply_updates(OccupancyMap<Key>& map, BrickGroups& bricks, const ScanValues& values,
                            Team& team, ThreadScratches& scratch) {
   if (map.num_bricks() == 0) map.reserve_bricks(bricks.bricks());  // a fresh map: all are new
+  const bool hits_here = !values.rated;  // rated hits carry their own sums
   for (std::size_t g = 0; g < bricks.count; ++g)
     for (BrickUpdate& u : bricks.groups[g]) {
       u.slot = map.brick_slot(u.coord);
-      map.prepare_values(map.brick_at(u.slot));
       for (std::size_t i = 0; i < u.miss.w.size(); ++i) u.miss.w[i] &= ~u.hit.w[i];  // hit wins
+      auto& brick = map.brick_at(u.slot);
+      const int masks = int(hits_here && u.hit.any()) + int(u.miss.any());
+      if (masks > 1 || brick.known.any() || map.change_detection_enabled())
+        map.prepare_values(brick);
     }
-  const bool hits_here = !values.rated;  // rated hits carry their own sums
   UpdateCounts total;
   if (map.change_detection_enabled()) {  // records per voxel, in one thread
     for (std::size_t g = 0; g < bricks.count; ++g)

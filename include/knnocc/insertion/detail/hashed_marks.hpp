@@ -2,13 +2,16 @@
 // The hashed scratch of a scan (ScanInserter, phase 2, when the dense box does not fit): one
 // thread's touched bricks, each with a hit and a miss mask, found through a hash of brick
 // coordinates. Slower than the dense scratch per voxel, but its size follows the voxels the rays
-// touch, not the scan's box.
+// touch, not the scan's box. Its memory can be capped (set_cap): a new brick past the cap reports
+// MemoryLimitError, so that a map's memory limit covers the inserter's scratch too.
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
 #include "../../core/detail/flat_index.hpp"
+#include "../../core/memory_limit.hpp"
 #include "../../map/brick.hpp"
 #include "../../raycast/dda.hpp"
 
@@ -30,6 +33,8 @@ class HashedMarks {
   /// brick is added.
   BrickMasks& at(std::uint64_t coord) {
     if (last_ != FlatIndex::kNone && coord == last_coord_) return bricks_[last_];
+    if (cap_ && memory_usage() + growth_bytes() > cap_ && index_.find(coord) == FlatIndex::kNone)
+      memory_limit_exceeded(limit_, elsewhere_ + memory_usage() + growth_bytes());
     bool inserted = false;
     last_ = index_.find_or_insert(coord, static_cast<std::uint32_t>(used_), inserted);
     last_coord_ = coord;
@@ -56,12 +61,34 @@ class HashedMarks {
     last_ = FlatIndex::kNone;
   }
 
+  /// Bytes held (kept between scans).
+  std::size_t memory_usage() const {
+    return bricks_.capacity() * sizeof(BrickMasks) + index_.memory_usage();
+  }
+  /// Caps memory_usage() at `cap` bytes (0: no cap): adding a brick that would pass it reports
+  /// MemoryLimitError(limit, needed), needed being `elsewhere` (the memory counted against the
+  /// same limit outside this scratch) plus what this scratch would hold.
+  void set_cap(std::size_t cap, std::size_t limit, std::size_t elsewhere) {
+    cap_ = cap;
+    limit_ = limit;
+    elsewhere_ = elsewhere;
+  }
+
  private:
+  // How much memory_usage() grows when the next new brick is added.
+  std::size_t growth_bytes() const {
+    std::size_t grow = index_.growth_bytes(index_.size() + 1);
+    if (used_ == bricks_.size() && bricks_.size() == bricks_.capacity())
+      grow += std::max<std::size_t>(bricks_.capacity(), 1) * sizeof(BrickMasks);
+    return grow;
+  }
+
   FlatIndex index_;  // brick coordinate -> index in bricks_
   std::vector<BrickMasks> bricks_;
   std::size_t used_ = 0;
   std::uint64_t last_coord_ = 0;
   std::uint32_t last_ = FlatIndex::kNone;
+  std::size_t cap_ = 0, limit_ = 0, elsewhere_ = 0;
 };
 
 /// walk_ray()'s visitor for the hashed scratch: marks the voxel in its brick's miss mask, looking

@@ -1,0 +1,154 @@
+// bench_bonxai_memory: peak memory per known voxel, knnocc against Bonxai's ProbabilisticMap, on
+// the same clouds, origins and resolution. Built only when CMake is given -DKNNOCC_BONXAI_DIR=<a
+// Bonxai checkout> (bench/NOTES.md).
+//
+// usage: bench_bonxai_memory [--data DIR]   (DIR defaults to ../shared/data; run from the root)
+//
+// Workloads: scan.dat (one scan of octomap_fr079, as bench_insert) at 0.1 and 0.05 m, the ten TUM
+// fr2/pioneer_slam2 clouds at 0.05 m, and bench_lidar's sweep (10 scans of 64 beams x 1800
+// azimuths, max range 25 m) at 0.1 m. Each library inserts a workload in its own forked child;
+// the figure is the peak resident memory the insertion added to the child (its peak reset at the
+// start, the clouds inherited from the parent not counted). Known voxels: knnocc's
+// OccupancyMap::num_voxels(); Bonxai's cells holding a value (VoxelGrid::activeCellsCount()).
+// knnocc walks rays exactly (every voxel a ray crosses, as OctoMap); Bonxai steps one voxel per
+// longest axis, so it knows fewer free voxels for the same clouds: hence per known voxel.
+
+#include <malloc.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "bench_common.hpp"
+#include "lidar_scene.hpp"
+
+#include <bonxai_map/probabilistic_map.hpp>
+#include <knnocc/insertion/scan_inserter.hpp>
+#include <knnocc/io/xyz.hpp>
+#include <knnocc/version.hpp>
+
+namespace fs = std::filesystem;
+using knnocc::bench::Scan;
+
+namespace {
+
+struct Workload {
+  std::string name;
+  const std::vector<Scan>* scans;
+  double res, max_range;  // max_range < 0: none
+};
+
+struct Measure {
+  double added_mb = 0, seconds = 0, structure_mb = 0;
+  std::size_t known = 0;
+};
+
+// Runs f() (which fills known, seconds and structure_mb) in a forked child; adds the peak RSS the
+// child gained over what it started with.
+template <class F>
+Measure in_child(F f) {
+  int fd[2];
+  if (pipe(fd) != 0) std::exit(2);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    malloc_trim(0);
+    const bool reset = knnocc::bench::reset_peak_rss();
+    const double start = knnocc::bench::resident_mb();
+    Measure m = f();
+    m.added_mb = reset ? knnocc::bench::peak_rss_mb() - start : 0;
+    if (write(fd[1], &m, sizeof m) != static_cast<ssize_t>(sizeof m)) _exit(1);
+    _exit(0);
+  }
+  close(fd[1]);
+  Measure m{};
+  if (read(fd[0], &m, sizeof m) != static_cast<ssize_t>(sizeof m)) m = Measure{};
+  close(fd[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return m;
+}
+
+Measure run_knnocc(const Workload& w) {
+  knnocc::OccupancyMap<knnocc::OcKey> map(w.res);
+  knnocc::ScanInserter<knnocc::OcKey> inserter(map);
+  const double t0 = knnocc::bench::now();
+  for (const Scan& s : *w.scans) inserter.insert_point_cloud(s.origin, s.points, w.max_range);
+  Measure m;
+  m.seconds = knnocc::bench::now() - t0;
+  m.known = map.num_voxels();
+  m.structure_mb = static_cast<double>(map.memory_usage()) / 1e6;
+  return m;
+}
+
+Measure run_bonxai(const Workload& w) {
+  Bonxai::ProbabilisticMap map(w.res);
+  const double range = w.max_range > 0 ? w.max_range : std::numeric_limits<double>::max();
+  const double t0 = knnocc::bench::now();
+  for (const Scan& s : *w.scans) map.insertPointCloud(s.points, s.origin, range);
+  Measure m;
+  m.seconds = knnocc::bench::now() - t0;
+  m.known = map.grid().activeCellsCount();
+  m.structure_mb = static_cast<double>(map.grid().memUsage()) / 1e6;
+  return m;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  fs::path data = fs::path("..") / "shared" / "data";
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--data" && i + 1 < argc) {
+      data = argv[++i];
+    } else {
+      std::fprintf(stderr, "usage: bench_bonxai_memory [--data DIR]\n");
+      return 2;
+    }
+  }
+  std::printf("bench_bonxai_memory: knnocc %s, build type '%s', Bonxai ProbabilisticMap\n",
+              knnocc::version_string, KNNOCC_BENCH_BUILD_TYPE);
+  std::vector<Scan> scan_dat, tum;
+  if (const std::string p = knnocc::bench::scan_dat(data); !p.empty())
+    scan_dat.push_back(Scan{knnocc::Point3f{}, knnocc::io::read_xyz(p).points});
+  if (fs::is_directory(data / "tum_fr2_pioneer_slam2"))
+    tum = knnocc::bench::sequence_scans((data / "tum_fr2_pioneer_slam2").string());
+  const knnocc::bench::Scene scene(1);
+  const std::vector<Scan> lidar = knnocc::bench::simulate(scene, 10, 64, 1800, 25.0, 1);
+
+  std::vector<Workload> loads;
+  if (!scan_dat.empty()) {
+    loads.push_back({"scan.dat 0.1 m", &scan_dat, 0.1, -1.0});
+    loads.push_back({"scan.dat 0.05 m", &scan_dat, 0.05, -1.0});
+  } else {
+    std::printf("scan.dat: not found under %s, skipped\n", data.string().c_str());
+  }
+  if (!tum.empty())
+    loads.push_back({"TUM pioneer_slam2 0.05 m", &tum, 0.05, -1.0});
+  else
+    std::printf("TUM fr2/pioneer_slam2: not found under %s, skipped\n", data.string().c_str());
+  loads.push_back({"LiDAR 10 x 64x1800 0.1 m", &lidar, 0.1, 25.0});
+
+  std::printf("%-26s %-7s %12s %10s %9s %12s %12s %8s\n", "workload", "library", "known voxels",
+              "peak MB", "s", "B/known", "struct MB", "ours/bx");
+  for (const Workload& w : loads) {
+    const Measure ours = in_child([&] { return run_knnocc(w); });
+    const Measure bx = in_child([&] { return run_bonxai(w); });
+    const double ours_b = ours.added_mb * 1048576.0 / static_cast<double>(ours.known);
+    const double bx_b = bx.added_mb * 1048576.0 / static_cast<double>(bx.known);
+    std::printf("%-26s %-7s %12zu %10.1f %9.3f %12.1f %12.1f\n", w.name.c_str(), "knnocc",
+                ours.known, ours.added_mb, ours.seconds, ours_b, ours.structure_mb);
+    std::printf("%-26s %-7s %12zu %10.1f %9.3f %12.1f %12.1f %8.2f%s\n", "", "Bonxai", bx.known,
+                bx.added_mb, bx.seconds, bx_b, bx.structure_mb, ours_b / bx_b,
+                ours_b <= bx_b ? "" : "  (knnocc needs more per known voxel)");
+  }
+  std::printf(
+      "peak MB: resident memory the insertion added to its forked child; B/known: that per known "
+      "voxel;\nstruct MB: the map's own estimate (OccupancyMap::memory_usage, "
+      "VoxelGrid::memUsage); "
+      "ours/bx: ratio of B/known\n");
+  return 0;
+}

@@ -100,6 +100,17 @@ std::vector<Variant> variants(bool ablate) {
   p = {};
   p.min_views = 4;
   v.push_back({"views4", p});
+  p = {};
+  p.support_scale = 0;
+  v.push_back({"-support", p});
+  for (double scale : {1.5, 3.0}) {
+    p = {};
+    p.support_scale = scale;
+    v.push_back({scale == 1.5 ? "sup*1.5" : "sup*3", p});
+  }
+  p = {};
+  p.min_support = 2;
+  v.push_back({"minsup2", p});
   return v;
 }
 

@@ -49,10 +49,12 @@ TEST_CASE("robust model: the rating rules") {
     CHECK(m.rate(c, dist).logodds == doctest::Approx(3 * l));
     CHECK(m.rate(c, dist).casts_ray);
     c.views = 4;
+    c.committed = true;  // the map point added evidence before
     CHECK(m.rate(c, dist).logodds == doctest::Approx(l));
   }
   SUBCASE("a confirmed point is never pushed towards free (floor at P_w)") {
     c.views = 5;
+    c.committed = true;
     c.s = 10.0;
     CHECK(knn.rate(10.0, dist).logodds < 0.0f);
     CHECK(m.rate(c, dist).logodds == doctest::Approx(logodds(p.knn.p_w)));
@@ -61,6 +63,7 @@ TEST_CASE("robust model: the rating rules") {
   }
   SUBCASE("one keyframe's endpoints in a voxel add their mean") {
     c.views = 5;
+    c.committed = true;
     c.in_voxel = 4;
     CHECK(m.rate(c, dist).logodds == doctest::Approx(logodds(knn.probability(0.05, dist)) / 4));
   }
@@ -82,6 +85,22 @@ TEST_CASE("robust model: the rating rules") {
     CHECK(v.rate(c, dist).logodds == 0.0f);
     c.voxel_logodds = -0.2f;
     CHECK(v.rate(c, dist).logodds > 0.0f);
+  }
+  SUBCASE("a confirmed point without independent support waits; with it, it commits") {
+    const double l = logodds(knn.probability(0.05, dist));
+    c.views = 4;
+    c.support = 0;
+    CHECK(m.rate(c, dist).logodds == 0.0f);
+    CHECK_FALSE(m.rate(c, dist).casts_ray);
+    c.support = 1;  // first commitment: the deferred views at once
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(4 * l));
+    c.committed = true;
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(l));
+    CHECK(m.support_radius(4, dist) == doctest::Approx(2.0 * dist.mean()));
+    CHECK(m.support_radius(2, dist) == 0.0);  // unconfirmed: not counted
+    RobustModelParams q;
+    q.support_scale = 0;
+    CHECK(RobustModel(q).support_radius(4, dist) == 0.0);
   }
   SUBCASE("invalid parameters are refused") {
     RobustModelParams q;
@@ -141,6 +160,69 @@ TEST_CASE("robust model in a Mapper: rays of other keyframes through a point tak
   // Observing it again adds nothing.
   m.insert_keyframe(Point3d{0, 0, 0}, pt, {7});
   CHECK_FALSE(m.map().is_occupied(*m.map().logodds(k)));
+}
+
+TEST_CASE("robust model in a Mapper: independent support against a brute-force count") {
+  // Random keyframes observing map points of a few small clusters, each cluster created by one
+  // keyframe, plus scattered points; contradictions off, so a point commits (adds evidence) at
+  // the first keyframe where it is confirmed and another keyframe's point lies within 2 mu.
+  RobustModelParams params;
+  params.knn.k = 3;
+  params.contra_min = 0;
+  Mapper<RobustModel> m(0.1, RobustModel(params));
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-2.0, 2.0), g(-0.04, 0.04);
+  std::uniform_int_distribution<int> coin(0, 3);
+  std::vector<Point3d> pos;
+  std::vector<std::size_t> creator;
+  std::vector<bool> committed;
+  std::size_t commits = 0, waits = 0;
+  for (std::size_t kf = 0; kf < 30; ++kf) {
+    std::vector<Point3d> pts;
+    std::vector<std::uint64_t> ids;
+    // re-observe some earlier points
+    for (std::size_t i = 0; i < pos.size(); ++i)
+      if (coin(rng) == 0) {
+        pts.push_back(pos[i]);
+        ids.push_back(i);
+      }
+    // a new cluster of 4 points and 3 scattered points, created by this keyframe
+    const Point3d c{u(rng), u(rng), u(rng) * 0.2 + 3.0};
+    for (int j = 0; j < 7; ++j) {
+      const Point3d p = j < 4 ? Point3d{c.x + g(rng), c.y + g(rng), c.z + g(rng)}
+                              : Point3d{u(rng), u(rng), u(rng) * 0.2 + 3.0};
+      pts.push_back(p);
+      ids.push_back(pos.size());
+      pos.push_back(p);
+      creator.push_back(kf);
+      committed.push_back(false);
+    }
+    m.insert_keyframe(Point3d{0, 0, 0}, pts, ids);
+    const double r = 2.0 * m.tracker().mu();
+    for (const std::uint64_t id : ids) {
+      const auto* e = m.map_points().find(id);
+      REQUIRE(e != nullptr);
+      const bool now = e->added != 0.0f;
+      if (committed[id]) {
+        CHECK(now);
+        continue;
+      }
+      bool supported = false;
+      for (std::size_t o = 0; o < pos.size(); ++o) {
+        const double dx = pos[o].x - pos[id].x, dy = pos[o].y - pos[id].y,
+                     dz = pos[o].z - pos[id].z;
+        if (o != id && creator[o] != creator[id] && dx * dx + dy * dy + dz * dz <= r * r)
+          supported = true;
+      }
+      const bool expect = e->views >= params.min_views && supported;
+      CHECK(now == expect);
+      committed[id] = now;
+      commits += now;
+      waits += e->views >= params.min_views && !supported;
+    }
+  }
+  CHECK(commits > 20);
+  CHECK(waits > 5);
 }
 
 TEST_CASE("robust model without map-point ids maps as the OctoMap model") {

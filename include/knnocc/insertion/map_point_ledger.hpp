@@ -35,6 +35,7 @@ class MapPointLedger {
     bool has_key = false;         ///< inside the key range
     std::uint32_t views = 0;      ///< keyframes that observed it
     std::uint32_t contra = 0;     ///< keyframes whose rays contradict it
+    std::size_t first = 0;        ///< the keyframe that observed it first (created it)
     std::size_t last = 0;         ///< the latest keyframe that observed it
     std::size_t last_contra = 0;  ///< the latest keyframe that contradicted it (+1; 0: none)
     float dir[3] = {0, 0, 0};     ///< first viewing direction (unit)
@@ -50,6 +51,7 @@ class MapPointLedger {
     Point& e = it->second;
     if (fresh) {
       e.position = p;
+      e.first = keyframe;
       const double dx = p.x - origin.x, dy = p.y - origin.y, dz = p.z - origin.z;
       const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
       if (r > 0) {

@@ -6,8 +6,16 @@
 //
 //   - multi-view support: an endpoint whose map point has been observed by fewer than min_views
 //     keyframes adds nothing and casts no ray yet (a wrong match is mostly seen by one keyframe);
-//   - re-rating at confirmation: the keyframe that brings a map point to min_views adds the
-//     evidence the earlier, deferred observations would have added (min_views times its own);
+//   - re-rating at confirmation: the first keyframe whose endpoint of a map point adds evidence
+//     (normally the one that brings it to min_views) adds what the earlier, deferred observations
+//     would have added (views times its own);
+//   - independent support at a second scale: a confirmed map point commits evidence only once at
+//     least min_support other map points within support_scale * mu (mu: the mean of the k-NN
+//     distances s) were created by keyframes other than its own creator; until then it is
+//     deferred like an unconfirmed one, and the count is taken again at each observation as the
+//     cloud grows. A wrong patch is a few points of one keyframe's stereo matching sharing one
+//     depth error, with nothing else near: s at the paper's k cannot tell it from sparse real
+//     structure, which other keyframes' points soon surround;
 //   - s: a confirmed endpoint's probability is eq 13's, but never below P_w (a point several
 //     keyframes agree on is not pushed towards free, however sparse its neighbourhood);
 //   - one keyframe's endpoints in one voxel add their mean, not their sum (eq 15 bounded: a patch
@@ -57,6 +65,9 @@ struct RobustModelParams {
   double contra_margin = 0.3;   ///< m
   /// Lowest probability of a confirmed endpoint (s part): P_w by default; 0.5 adds nothing
   double p_floor = -1;  ///< < 0: P_w
+  /// Independent support at a second scale (see above; support_scale 0 or min_support 0: off).
+  double support_scale = 2.0;
+  std::uint32_t min_support = 1;
 
   void validate() const {
     knn.validate();
@@ -71,6 +82,8 @@ struct RobustModelParams {
       detail::invalid_argument(
           "contradiction: ratio in [0, 100], radius in [0, 10) m, margin in "
           "[0, 100) m");
+    if (!(support_scale >= 0 && support_scale <= 100) || min_support > 100000)
+      detail::invalid_argument("support: scale in [0, 100], min_support in [0, 100000]");
     if (std::isnan(free_veto) || free_veto > 0)
       detail::invalid_argument("free_veto must be <= 0 (or -inf: off)");
   }
@@ -95,14 +108,15 @@ class RobustModel {
   EndpointRating rate(const PointContext& c, const RunningNormal& dist) const {
     if (c.views == 0)  // no map-point ids: OctoMap's model (one hit per voxel and scan)
       return EndpointRating{c.in_voxel > 1 ? hit_ / static_cast<float>(c.in_voxel) : hit_, true};
-    if (c.views < params_.min_views || rejects(c.views, c.contradictions))
+    if (c.views < params_.min_views || rejects(c.views, c.contradictions) ||
+        c.support < params_.min_support)
       return EndpointRating{0.0f, false};
     double l = hit_;
     if (params_.use_s) {
       const double p = knn_.probability(c.s, dist);
       l = std::max(static_cast<double>(logodds(p)), floor_);
     }
-    if (params_.rerate && c.views == params_.min_views) l *= params_.min_views;
+    if (params_.rerate && !c.committed) l *= c.views;
     if (c.voxel_logodds < params_.free_veto && c.views < params_.veto_views) l = 0.0;
     if (params_.bound_voxel && c.in_voxel > 1) l /= c.in_voxel;
     return EndpointRating{static_cast<float>(l), true};
@@ -114,6 +128,14 @@ class RobustModel {
            contradictions >= params_.contra_ratio * views;
   }
   double contradiction_radius() const { return params_.contra_radius; }
+  /// Radius (m) to count an endpoint's independent support in (PointContext::support); 0: not
+  /// needed (support off, or the endpoint is not confirmed).
+  double support_radius(std::uint32_t views, const RunningNormal& dist) const {
+    if (params_.support_scale <= 0 || params_.min_support == 0 || views < params_.min_views ||
+        dist.count() == 0)
+      return 0.0;
+    return params_.support_scale * dist.mean();
+  }
   double contradiction_margin() const { return params_.contra_margin; }
 
  private:

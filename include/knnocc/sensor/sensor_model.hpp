@@ -86,6 +86,15 @@ struct has_rejects<M,
                                decltype(double(std::declval<const M&>().contradiction_margin()))>>
     : std::true_type {};
 
+// Optional for a contextual model: support at a second scale, with
+//   double support_radius(std::uint32_t views, const RunningNormal& dist) const;
+// (> 0: Mapper counts the other map points within that radius into PointContext::support).
+template <class M, class = void>
+struct has_support : std::false_type {};
+template <class M>
+struct has_support<M, std::void_t<decltype(double(std::declval<const M&>().support_radius(
+                          1u, std::declval<const RunningNormal&>())))>> : std::true_type {};
+
 /// Compiles only for a type that meets the sensor-model concept; the message names what is
 /// missing.
 template <class M>

@@ -68,13 +68,20 @@ TEST_CASE("robust model: the rating rules") {
     CHECK(m.rate(c, dist).logodds == doctest::Approx(logodds(knn.probability(0.05, dist)) / 4));
   }
   SUBCASE("a rejected point adds nothing and casts no ray") {
+    RobustModelParams q;
+    q.contra_min = 2;
+    const RobustModel m2(q);
+    CHECK_FALSE(m.rejects(4, 4));  // off by default
+    CHECK(m.contradiction_radius() == 0.0);
+    CHECK(m2.contradiction_radius() == doctest::Approx(0.05));
     c.views = 4;
     c.contradictions = 2;  // >= contra_min 2 and >= 0.5 * 4
-    CHECK(m.rejects(4, 2));
-    CHECK(m.rate(c, dist).logodds == 0.0f);
-    CHECK_FALSE(m.rate(c, dist).casts_ray);
-    CHECK_FALSE(m.rejects(6, 2));  // 2 < 0.5 * 6
-    CHECK_FALSE(m.rejects(1, 1));  // < contra_min
+    CHECK(m2.rejects(4, 2));
+    CHECK(m2.rate(c, dist).logodds == 0.0f);
+    CHECK_FALSE(m2.rate(c, dist).casts_ray);
+    CHECK(m.rate(c, dist).logodds > 0.0f);
+    CHECK_FALSE(m2.rejects(6, 2));  // 2 < 0.5 * 6
+    CHECK_FALSE(m2.rejects(1, 1));  // < contra_min
   }
   SUBCASE("free_veto: a voxel with free evidence takes no occupied evidence") {
     RobustModelParams q;
@@ -140,7 +147,9 @@ TEST_CASE("robust model in a Mapper: deferral, confirmation, views per map point
 }
 
 TEST_CASE("robust model in a Mapper: rays of other keyframes through a point take it back") {
-  Mapper<RobustModel> m(0.1);
+  RobustModelParams params;
+  params.contra_min = 2;  // off by default
+  Mapper<RobustModel> m(0.1, RobustModel(params));
   const std::vector<Point3d> pt{{2.05, 0.05, 0.05}};
   for (int i = 0; i < 3; ++i) m.insert_keyframe(Point3d{0, 0, 0}, pt, {7});
   OcKey k;

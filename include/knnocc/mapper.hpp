@@ -411,10 +411,12 @@ class Mapper {
       if (auto* e = ledger_.find(point_ids_[j])) e->added += ratings_[j].logodds;
     }
     if constexpr (detail::has_rejects<Model>::value)
-      ledger_.contradict(
-          origin_, world_, ratings_, keyframe_, model_.contradiction_radius(),
-          model_.contradiction_margin(), map_,
-          [&](std::uint32_t views, std::uint32_t contra) { return model_.rejects(views, contra); });
+      if (model_.contradiction_radius() > 0)
+        ledger_.contradict(origin_, world_, ratings_, keyframe_, model_.contradiction_radius(),
+                           model_.contradiction_margin(), map_,
+                           [&](std::uint32_t views, std::uint32_t contra) {
+                             return model_.rejects(views, contra);
+                           });
   }
 
   MapperOptions options_;

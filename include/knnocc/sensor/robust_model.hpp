@@ -58,8 +58,9 @@ struct RobustModelParams {
   /// Free-space evidence (insertion/map_point_ledger.hpp): a map point is rejected, and its
   /// evidence taken back, once at least contra_min other keyframes' rays passed within
   /// contra_radius of it and ended more than contra_margin beyond it, and at least contra_ratio
-  /// times its views did (contra_min 0: off).
-  std::uint32_t contra_min = 2;
+  /// times its views did (contra_min 0: off, the default: with independent support it no longer
+  /// pays, and its ray walk costs a fifth of the model's time; bench/bench_robust_model.cpp).
+  std::uint32_t contra_min = 0;
   double contra_ratio = 0.5;
   double contra_radius = 0.05;  ///< m
   double contra_margin = 0.3;   ///< m
@@ -127,7 +128,8 @@ class RobustModel {
     return params_.contra_min > 0 && contradictions >= params_.contra_min &&
            contradictions >= params_.contra_ratio * views;
   }
-  double contradiction_radius() const { return params_.contra_radius; }
+  /// 0 when the contradiction test is off (Mapper then walks no rays for it).
+  double contradiction_radius() const { return params_.contra_min > 0 ? params_.contra_radius : 0; }
   /// Radius (m) to count an endpoint's independent support in (PointContext::support); 0: not
   /// needed (support off, or the endpoint is not confirmed).
   double support_radius(std::uint32_t views, const RunningNormal& dist) const {

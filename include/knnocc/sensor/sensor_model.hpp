@@ -76,7 +76,8 @@ struct has_context_rate<
 // Optional for a contextual model: free-space evidence against map points, with
 //   bool rejects(std::uint32_t views, std::uint32_t contradictions) const;
 //   double contradiction_radius() const;  double contradiction_margin() const;
-// (insertion/map_point_ledger.hpp); a rejected point's earlier evidence is taken back.
+// (insertion/map_point_ledger.hpp); a rejected point's earlier evidence is taken back. A radius
+// of 0 turns the test off.
 template <class M, class = void>
 struct has_rejects : std::false_type {};
 template <class M>

@@ -107,6 +107,25 @@ std::vector<Variant> variants(bool ablate) {
   p = {};
   p.min_support = 2;
   v.push_back({"minsup2", p});
+  p = {};
+  p.min_views = 2;
+  v.push_back({"views2", p});
+  p = {};
+  p.support_scale = 2.5;
+  v.push_back({"sup*2.5", p});
+  p = {};
+  p.ray_views = 3;
+  v.push_back({"ray3", p});
+  p = {};
+  p.ray_views = 5;
+  v.push_back({"ray5", p});
+  p = {};
+  p.min_views = 2;
+  p.support_scale = 1.75;
+  v.push_back({"v2sup1.75", p});
+  p = {};
+  p.support_scale = 1.75;
+  v.push_back({"sup*1.75", p});
   return v;
 }
 

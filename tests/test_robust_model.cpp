@@ -47,10 +47,21 @@ TEST_CASE("robust model: the rating rules") {
     const double l = logodds(knn.probability(0.05, dist));
     c.views = 3;
     CHECK(m.rate(c, dist).logodds == doctest::Approx(3 * l));
-    CHECK(m.rate(c, dist).casts_ray);
     c.views = 4;
     c.committed = true;  // the map point added evidence before
     CHECK(m.rate(c, dist).logodds == doctest::Approx(l));
+  }
+  SUBCASE("a committed endpoint casts its ray from ray_views views on") {
+    c.views = 3;
+    CHECK(m.rate(c, dist).logodds > 0.0f);
+    CHECK_FALSE(m.rate(c, dist).casts_ray);
+    c.views = 4;
+    c.committed = true;
+    CHECK(m.rate(c, dist).casts_ray);
+    RobustModelParams q;
+    q.ray_views = 0;  // from min_views on
+    c.views = 3;
+    CHECK(RobustModel(q).rate(c, dist).casts_ray);
   }
   SUBCASE("a confirmed point is never pushed towards free (floor at P_w)") {
     c.views = 5;
@@ -136,14 +147,18 @@ TEST_CASE("robust model in a Mapper: deferral, confirmation, views per map point
   CHECK_FALSE(m.map().logodds(k).has_value());        // deferred: its voxel untouched
   CHECK_FALSE(m.map().logodds(crossed).has_value());  // no ray yet
   CHECK(m.map_points().find(42)->views == 2);
-  const KeyframeStats ks = m.insert_keyframe(origin, pts, ids);
-  CHECK(ks.rays == 1);
+  KeyframeStats ks = m.insert_keyframe(origin, pts, ids);
+  CHECK(ks.rays == 0);  // rays from ray_views (4) views on
   // One point: no s (fewer than k neighbours), rated at the floor P_w, three times at once.
   REQUIRE(m.map().logodds(k).has_value());
   CHECK(*m.map().logodds(k) == doctest::Approx(3 * logodds(0.65)).epsilon(1e-5));
-  CHECK(*m.map().logodds(crossed) == doctest::Approx(logodds(0.4)));
+  CHECK_FALSE(m.map().logodds(crossed).has_value());
   CHECK(m.map_points().find(42)->views == 3);
   CHECK(m.map_points().find(42)->added == doctest::Approx(3 * logodds(0.65)).epsilon(1e-5));
+  ks = m.insert_keyframe(origin, pts, ids);
+  CHECK(ks.rays == 1);
+  CHECK(*m.map().logodds(crossed) == doctest::Approx(logodds(0.4)));
+  CHECK(*m.map().logodds(k) == doctest::Approx(4 * logodds(0.65)).epsilon(1e-5));
 }
 
 TEST_CASE("robust model in a Mapper: rays of other keyframes through a point take it back") {
@@ -159,8 +174,8 @@ TEST_CASE("robust model in a Mapper: rays of other keyframes through a point tak
   // through point 7 and end 2 m behind it.
   const Point3d side{2.05, -3.0, 0.05};
   const std::vector<Point3d> behind{{2.05, 2.0, 0.05}};
-  // (no ray while point 8 is unconfirmed: the 3rd and 4th keyframes contradict point 7)
-  for (int i = 0; i < 4; ++i) m.insert_keyframe(side, behind, {8});
+  // (no ray before point 8 has ray_views (4) views: the 4th and 5th keyframes contradict 7)
+  for (int i = 0; i < 5; ++i) m.insert_keyframe(side, behind, {8});
   const auto* p = m.map_points().find(7);
   REQUIRE(p != nullptr);
   CHECK(p->contra >= 2);

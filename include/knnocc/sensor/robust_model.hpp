@@ -18,11 +18,15 @@
 //     structure, which other keyframes' points soon surround;
 //   - s: a confirmed endpoint's probability is eq 13's, but never below P_w (a point several
 //     keyframes agree on is not pushed towards free, however sparse its neighbourhood);
+//   - free rays from ray_views (4) views on: a map point three keyframes agree on adds occupied
+//     evidence, but carves space only once a fourth one does (fewer wrongly carved voxels in the
+//     simulator, fewer lost and free multi-view voxels on the real stereo set);
 //   - one keyframe's endpoints in one voxel add their mean, not their sum (eq 15 bounded: a patch
 //     of wrong matches cannot outvote the rays through it);
-//   - free-space evidence: an endpoint whose voxel already holds log-odds below free_veto (rays
-//     of other keyframes crossed it) adds no occupied evidence, unless its map point has at least
-//     veto_views views;
+//   - free-space evidence, both off by default (measured in the bench, they no longer pay): an
+//     endpoint whose voxel already holds log-odds below free_veto adds no occupied evidence
+//     unless its map point has veto_views views; contra_min other keyframes' rays passing
+//     through a map point take its evidence back (insertion/map_point_ledger.hpp);
 //   - without map-point ids (dense sensors: depth cameras, LiDAR) there is no multi-view support:
 //     every endpoint is rated as OctoMap's model rates it (hit, ray), so dense input keeps its
 //     structure (the paper's s-rating removes far, sparser surfaces there).
@@ -49,6 +53,7 @@ namespace knnocc {
 struct RobustModelParams {
   KnnModelParams knn = {};      ///< eq 13 for the s part (k, w, P_u, P_w, free probability)
   std::uint32_t min_views = 3;  ///< keyframes that confirm a map point (1: no deferral)
+  std::uint32_t ray_views = 4;  ///< a committed endpoint casts its ray from this many views on
   bool rerate = true;           ///< the confirming keyframe adds the deferred evidence
   bool use_s = true;            ///< eq 13 (floored at P_w); false: OctoMap's hit for all
   bool bound_voxel = true;      ///< one keyframe adds the mean of its endpoints in a voxel
@@ -99,6 +104,7 @@ class RobustModel {
     params_.validate();
     hit_ = static_cast<float>(logodds(params_.p_hit));
     floor_ = logodds(params_.p_floor < 0 ? params_.knn.p_w : params_.p_floor);
+    ray_views_ = std::max(params_.ray_views, params_.min_views);
   }
 
   const RobustModelParams& params() const { return params_; }
@@ -120,7 +126,7 @@ class RobustModel {
     if (params_.rerate && !c.committed) l *= c.views;
     if (c.voxel_logodds < params_.free_veto && c.views < params_.veto_views) l = 0.0;
     if (params_.bound_voxel && c.in_voxel > 1) l /= c.in_voxel;
-    return EndpointRating{static_cast<float>(l), true};
+    return EndpointRating{static_cast<float>(l), c.views >= ray_views_};
   }
 
   /// Free-space evidence outweighs the point's views (see RobustModelParams::contra_min).
@@ -145,6 +151,7 @@ class RobustModel {
   KnnModel knn_;
   float hit_ = 0.0f;
   double floor_ = 0.0;
+  std::uint32_t ray_views_ = 1;
 };
 
 }  // namespace knnocc

@@ -114,6 +114,12 @@ std::vector<Variant> variants(bool ablate) {
   p.support_scale = 2.5;
   v.push_back({"sup*2.5", p});
   p = {};
+  p.early_views = 0;
+  v.push_back({"-early", p});
+  p = {};
+  p.early_support = 8;
+  v.push_back({"early8", p});
+  p = {};
   p.ray_views = 3;
   v.push_back({"ray3", p});
   p = {};

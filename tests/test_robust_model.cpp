@@ -115,10 +115,22 @@ TEST_CASE("robust model: the rating rules") {
     c.committed = true;
     CHECK(m.rate(c, dist).logodds == doctest::Approx(l));
     CHECK(m.support_radius(4, dist) == doctest::Approx(2.0 * dist.mean()));
-    CHECK(m.support_radius(2, dist) == 0.0);  // unconfirmed: not counted
+    CHECK(m.support_radius(1, dist) == 0.0);  // seen once: not counted
     RobustModelParams q;
     q.support_scale = 0;
     CHECK(RobustModel(q).support_radius(4, dist) == 0.0);
+    // early commitment: two views and early_support (12) independent points
+    c.committed = false;
+    c.views = 2;
+    c.support = 11;
+    CHECK(m.rate(c, dist).logodds == 0.0f);
+    c.support = 12;
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(2 * l));
+    CHECK_FALSE(m.rate(c, dist).casts_ray);                 // rays from ray_views (4) on
+    c.support = std::numeric_limits<std::uint32_t>::max();  // not counted: no early commitment
+    CHECK(m.rate(c, dist).logodds == 0.0f);
+    CHECK(m.support_radius(2, dist) > 0.0);
+    CHECK(m.support_radius(1, dist) == 0.0);
   }
   SUBCASE("invalid parameters are refused") {
     RobustModelParams q;
@@ -192,6 +204,7 @@ TEST_CASE("robust model in a Mapper: independent support against a brute-force c
   // the first keyframe where it is confirmed and another keyframe's point lies within 2 mu.
   RobustModelParams params;
   params.knn.k = 3;
+  params.early_support = 2;  // (12 by default) so that two-view points commit here too
   params.contra_min = 0;
   Mapper<RobustModel> m(0.1, RobustModel(params));
   std::mt19937 rng(11);
@@ -200,7 +213,7 @@ TEST_CASE("robust model in a Mapper: independent support against a brute-force c
   std::vector<Point3d> pos;
   std::vector<std::size_t> creator;
   std::vector<bool> committed;
-  std::size_t commits = 0, waits = 0;
+  std::size_t commits = 0, waits = 0, early = 0;
   for (std::size_t kf = 0; kf < 30; ++kf) {
     std::vector<Point3d> pts;
     std::vector<std::uint64_t> ids;
@@ -231,14 +244,16 @@ TEST_CASE("robust model in a Mapper: independent support against a brute-force c
         CHECK(now);
         continue;
       }
-      bool supported = false;
+      std::uint32_t support = 0;
       for (std::size_t o = 0; o < pos.size(); ++o) {
         const double dx = pos[o].x - pos[id].x, dy = pos[o].y - pos[id].y,
                      dz = pos[o].z - pos[id].z;
-        if (o != id && creator[o] != creator[id] && dx * dx + dy * dy + dz * dz <= r * r)
-          supported = true;
+        if (o != id && creator[o] != creator[id] && dx * dx + dy * dy + dz * dz <= r * r) ++support;
       }
-      const bool expect = e->views >= params.min_views && supported;
+      const bool supported = support >= 1;
+      const bool expect = (e->views >= params.min_views && supported) ||
+                          (e->views >= params.early_views && support >= params.early_support);
+      early += e->views < params.min_views && expect;
       CHECK(now == expect);
       committed[id] = now;
       commits += now;
@@ -247,6 +262,7 @@ TEST_CASE("robust model in a Mapper: independent support against a brute-force c
   }
   CHECK(commits > 20);
   CHECK(waits > 5);
+  CHECK(early > 0);
 }
 
 TEST_CASE("robust model without map-point ids maps as the OctoMap model") {

@@ -16,6 +16,9 @@
 //     cloud grows. A wrong patch is a few points of one keyframe's stereo matching sharing one
 //     depth error, with nothing else near: s at the paper's k cannot tell it from sparse real
 //     structure, which other keyframes' points soon surround;
+//   - early commitment: a map point seen by early_views (2) keyframes commits already when
+//     early_support (12) independent points surround it (sparse views of dense real structure;
+//     a wrong patch has none);
 //   - s: a confirmed endpoint's probability is eq 13's, but never below P_w (a point several
 //     keyframes agree on is not pushed towards free, however sparse its neighbourhood);
 //   - free rays from ray_views (4) views on: a map point three keyframes agree on adds occupied
@@ -74,6 +77,10 @@ struct RobustModelParams {
   /// Independent support at a second scale (see above; support_scale 0 or min_support 0: off).
   double support_scale = 2.0;
   std::uint32_t min_support = 1;
+  /// A map point with early_views (< min_views) views commits once early_support independent
+  /// points surround it (early_views 0: off): real structure seen twice in a dense region.
+  std::uint32_t early_views = 2;
+  std::uint32_t early_support = 12;
 
   void validate() const {
     knn.validate();
@@ -115,7 +122,10 @@ class RobustModel {
   EndpointRating rate(const PointContext& c, const RunningNormal& dist) const {
     if (c.views == 0)  // no map-point ids: OctoMap's model (one hit per voxel and scan)
       return EndpointRating{c.in_voxel > 1 ? hit_ / static_cast<float>(c.in_voxel) : hit_, true};
-    if (c.views < params_.min_views || rejects(c.views, c.contradictions) ||
+    const bool early = params_.early_views > 0 && c.views >= params_.early_views &&
+                       c.support != std::numeric_limits<std::uint32_t>::max() &&
+                       c.support >= params_.early_support;
+    if ((c.views < params_.min_views && !early) || rejects(c.views, c.contradictions) ||
         c.support < params_.min_support)
       return EndpointRating{0.0f, false};
     double l = hit_;
@@ -139,8 +149,10 @@ class RobustModel {
   /// Radius (m) to count an endpoint's independent support in (PointContext::support); 0: not
   /// needed (support off, or the endpoint is not confirmed).
   double support_radius(std::uint32_t views, const RunningNormal& dist) const {
-    if (params_.support_scale <= 0 || params_.min_support == 0 || views < params_.min_views ||
-        dist.count() == 0)
+    const std::uint32_t from = params_.early_views > 0
+                                   ? std::min(params_.early_views, params_.min_views)
+                                   : params_.min_views;
+    if (params_.support_scale <= 0 || params_.min_support == 0 || views < from || dist.count() == 0)
       return 0.0;
     return params_.support_scale * dist.mean();
   }

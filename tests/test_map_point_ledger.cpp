@@ -19,6 +19,8 @@ TEST_CASE("ledger: views once per keyframe, first position and direction kept, p
   l.observe(5, {1, 0, 0}, o, 0, map.grid());
   const auto& e = l.observe(5, {9, 9, 9}, Point3d{1, -1, 0}, 1, map.grid());
   CHECK(e.views == 2);
+  CHECK(e.first == 0);  // its creator
+  CHECK(e.last == 1);
   CHECK(e.position.x == 1.0);
   CHECK(MapPointLedger<OcKey>::parallax(e, {1, 0, 0}, Point3d{1, -1, 0}) ==
         doctest::Approx(M_PI / 2));

@@ -47,12 +47,25 @@ TEST_CASE("robust model: the rating rules") {
     const double l = logodds(knn.probability(0.05, dist));
     c.views = 3;
     CHECK(m.rate(c, dist).logodds == doctest::Approx(3 * l));
-    CHECK(m.rate(c, dist).casts_ray);
     c.views = 4;
+    c.committed = true;  // the map point added evidence before
     CHECK(m.rate(c, dist).logodds == doctest::Approx(l));
+  }
+  SUBCASE("a committed endpoint casts its ray from ray_views views on") {
+    c.views = 3;
+    CHECK(m.rate(c, dist).logodds > 0.0f);
+    CHECK_FALSE(m.rate(c, dist).casts_ray);
+    c.views = 4;
+    c.committed = true;
+    CHECK(m.rate(c, dist).casts_ray);
+    RobustModelParams q;
+    q.ray_views = 0;  // from min_views on
+    c.views = 3;
+    CHECK(RobustModel(q).rate(c, dist).casts_ray);
   }
   SUBCASE("a confirmed point is never pushed towards free (floor at P_w)") {
     c.views = 5;
+    c.committed = true;
     c.s = 10.0;
     CHECK(knn.rate(10.0, dist).logodds < 0.0f);
     CHECK(m.rate(c, dist).logodds == doctest::Approx(logodds(p.knn.p_w)));
@@ -61,17 +74,25 @@ TEST_CASE("robust model: the rating rules") {
   }
   SUBCASE("one keyframe's endpoints in a voxel add their mean") {
     c.views = 5;
+    c.committed = true;
     c.in_voxel = 4;
     CHECK(m.rate(c, dist).logodds == doctest::Approx(logodds(knn.probability(0.05, dist)) / 4));
   }
   SUBCASE("a rejected point adds nothing and casts no ray") {
+    RobustModelParams q;
+    q.contra_min = 2;
+    const RobustModel m2(q);
+    CHECK_FALSE(m.rejects(4, 4));  // off by default
+    CHECK(m.contradiction_radius() == 0.0);
+    CHECK(m2.contradiction_radius() == doctest::Approx(0.05));
     c.views = 4;
     c.contradictions = 2;  // >= contra_min 2 and >= 0.5 * 4
-    CHECK(m.rejects(4, 2));
-    CHECK(m.rate(c, dist).logodds == 0.0f);
-    CHECK_FALSE(m.rate(c, dist).casts_ray);
-    CHECK_FALSE(m.rejects(6, 2));  // 2 < 0.5 * 6
-    CHECK_FALSE(m.rejects(1, 1));  // < contra_min
+    CHECK(m2.rejects(4, 2));
+    CHECK(m2.rate(c, dist).logodds == 0.0f);
+    CHECK_FALSE(m2.rate(c, dist).casts_ray);
+    CHECK(m.rate(c, dist).logodds > 0.0f);
+    CHECK_FALSE(m2.rejects(6, 2));  // 2 < 0.5 * 6
+    CHECK_FALSE(m2.rejects(1, 1));  // < contra_min
   }
   SUBCASE("free_veto: a voxel with free evidence takes no occupied evidence") {
     RobustModelParams q;
@@ -82,6 +103,34 @@ TEST_CASE("robust model: the rating rules") {
     CHECK(v.rate(c, dist).logodds == 0.0f);
     c.voxel_logodds = -0.2f;
     CHECK(v.rate(c, dist).logodds > 0.0f);
+  }
+  SUBCASE("a confirmed point without independent support waits; with it, it commits") {
+    const double l = logodds(knn.probability(0.05, dist));
+    c.views = 4;
+    c.support = 0;
+    CHECK(m.rate(c, dist).logodds == 0.0f);
+    CHECK_FALSE(m.rate(c, dist).casts_ray);
+    c.support = 1;  // first commitment: the deferred views at once
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(4 * l));
+    c.committed = true;
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(l));
+    CHECK(m.support_radius(4, dist) == doctest::Approx(2.0 * dist.mean()));
+    CHECK(m.support_radius(1, dist) == 0.0);  // seen once: not counted
+    RobustModelParams q;
+    q.support_scale = 0;
+    CHECK(RobustModel(q).support_radius(4, dist) == 0.0);
+    // early commitment: two views and early_support (12) independent points
+    c.committed = false;
+    c.views = 2;
+    c.support = 11;
+    CHECK(m.rate(c, dist).logodds == 0.0f);
+    c.support = 12;
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(2 * l));
+    CHECK_FALSE(m.rate(c, dist).casts_ray);                 // rays from ray_views (4) on
+    c.support = std::numeric_limits<std::uint32_t>::max();  // not counted: no early commitment
+    CHECK(m.rate(c, dist).logodds == 0.0f);
+    CHECK(m.support_radius(2, dist) > 0.0);
+    CHECK(m.support_radius(1, dist) == 0.0);
   }
   SUBCASE("invalid parameters are refused") {
     RobustModelParams q;
@@ -110,18 +159,24 @@ TEST_CASE("robust model in a Mapper: deferral, confirmation, views per map point
   CHECK_FALSE(m.map().logodds(k).has_value());        // deferred: its voxel untouched
   CHECK_FALSE(m.map().logodds(crossed).has_value());  // no ray yet
   CHECK(m.map_points().find(42)->views == 2);
-  const KeyframeStats ks = m.insert_keyframe(origin, pts, ids);
-  CHECK(ks.rays == 1);
+  KeyframeStats ks = m.insert_keyframe(origin, pts, ids);
+  CHECK(ks.rays == 0);  // rays from ray_views (4) views on
   // One point: no s (fewer than k neighbours), rated at the floor P_w, three times at once.
   REQUIRE(m.map().logodds(k).has_value());
   CHECK(*m.map().logodds(k) == doctest::Approx(3 * logodds(0.65)).epsilon(1e-5));
-  CHECK(*m.map().logodds(crossed) == doctest::Approx(logodds(0.4)));
+  CHECK_FALSE(m.map().logodds(crossed).has_value());
   CHECK(m.map_points().find(42)->views == 3);
   CHECK(m.map_points().find(42)->added == doctest::Approx(3 * logodds(0.65)).epsilon(1e-5));
+  ks = m.insert_keyframe(origin, pts, ids);
+  CHECK(ks.rays == 1);
+  CHECK(*m.map().logodds(crossed) == doctest::Approx(logodds(0.4)));
+  CHECK(*m.map().logodds(k) == doctest::Approx(4 * logodds(0.65)).epsilon(1e-5));
 }
 
 TEST_CASE("robust model in a Mapper: rays of other keyframes through a point take it back") {
-  Mapper<RobustModel> m(0.1);
+  RobustModelParams params;
+  params.contra_min = 2;  // off by default
+  Mapper<RobustModel> m(0.1, RobustModel(params));
   const std::vector<Point3d> pt{{2.05, 0.05, 0.05}};
   for (int i = 0; i < 3; ++i) m.insert_keyframe(Point3d{0, 0, 0}, pt, {7});
   OcKey k;
@@ -131,8 +186,8 @@ TEST_CASE("robust model in a Mapper: rays of other keyframes through a point tak
   // through point 7 and end 2 m behind it.
   const Point3d side{2.05, -3.0, 0.05};
   const std::vector<Point3d> behind{{2.05, 2.0, 0.05}};
-  // (no ray while point 8 is unconfirmed: the 3rd and 4th keyframes contradict point 7)
-  for (int i = 0; i < 4; ++i) m.insert_keyframe(side, behind, {8});
+  // (no ray before point 8 has ray_views (4) views: the 4th and 5th keyframes contradict 7)
+  for (int i = 0; i < 5; ++i) m.insert_keyframe(side, behind, {8});
   const auto* p = m.map_points().find(7);
   REQUIRE(p != nullptr);
   CHECK(p->contra >= 2);
@@ -141,6 +196,73 @@ TEST_CASE("robust model in a Mapper: rays of other keyframes through a point tak
   // Observing it again adds nothing.
   m.insert_keyframe(Point3d{0, 0, 0}, pt, {7});
   CHECK_FALSE(m.map().is_occupied(*m.map().logodds(k)));
+}
+
+TEST_CASE("robust model in a Mapper: independent support against a brute-force count") {
+  // Random keyframes observing map points of a few small clusters, each cluster created by one
+  // keyframe, plus scattered points; contradictions off, so a point commits (adds evidence) at
+  // the first keyframe where it is confirmed and another keyframe's point lies within 2 mu.
+  RobustModelParams params;
+  params.knn.k = 3;
+  params.early_support = 2;  // (12 by default) so that two-view points commit here too
+  params.contra_min = 0;
+  Mapper<RobustModel> m(0.1, RobustModel(params));
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-2.0, 2.0), g(-0.04, 0.04);
+  std::uniform_int_distribution<int> coin(0, 3);
+  std::vector<Point3d> pos;
+  std::vector<std::size_t> creator;
+  std::vector<bool> committed;
+  std::size_t commits = 0, waits = 0, early = 0;
+  for (std::size_t kf = 0; kf < 30; ++kf) {
+    std::vector<Point3d> pts;
+    std::vector<std::uint64_t> ids;
+    // re-observe some earlier points
+    for (std::size_t i = 0; i < pos.size(); ++i)
+      if (coin(rng) == 0) {
+        pts.push_back(pos[i]);
+        ids.push_back(i);
+      }
+    // a new cluster of 4 points and 3 scattered points, created by this keyframe
+    const Point3d c{u(rng), u(rng), u(rng) * 0.2 + 3.0};
+    for (int j = 0; j < 7; ++j) {
+      const Point3d p = j < 4 ? Point3d{c.x + g(rng), c.y + g(rng), c.z + g(rng)}
+                              : Point3d{u(rng), u(rng), u(rng) * 0.2 + 3.0};
+      pts.push_back(p);
+      ids.push_back(pos.size());
+      pos.push_back(p);
+      creator.push_back(kf);
+      committed.push_back(false);
+    }
+    m.insert_keyframe(Point3d{0, 0, 0}, pts, ids);
+    const double r = 2.0 * m.tracker().mu();
+    for (const std::uint64_t id : ids) {
+      const auto* e = m.map_points().find(id);
+      REQUIRE(e != nullptr);
+      const bool now = e->added != 0.0f;
+      if (committed[id]) {
+        CHECK(now);
+        continue;
+      }
+      std::uint32_t support = 0;
+      for (std::size_t o = 0; o < pos.size(); ++o) {
+        const double dx = pos[o].x - pos[id].x, dy = pos[o].y - pos[id].y,
+                     dz = pos[o].z - pos[id].z;
+        if (o != id && creator[o] != creator[id] && dx * dx + dy * dy + dz * dz <= r * r) ++support;
+      }
+      const bool supported = support >= 1;
+      const bool expect = (e->views >= params.min_views && supported) ||
+                          (e->views >= params.early_views && support >= params.early_support);
+      early += e->views < params.min_views && expect;
+      CHECK(now == expect);
+      committed[id] = now;
+      commits += now;
+      waits += e->views >= params.min_views && !supported;
+    }
+  }
+  CHECK(commits > 20);
+  CHECK(waits > 5);
+  CHECK(early > 0);
 }
 
 TEST_CASE("robust model without map-point ids maps as the OctoMap model") {

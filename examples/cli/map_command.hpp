@@ -94,9 +94,11 @@ before the summary: knn k K map_points N valid N mu X sigma X rays R of E median
   --s-limit X           valid map points have s_p < X (default: no limit)
   (--discretize does not apply to the k-NN model)
 robust model (--model robust, sensor/robust_model.hpp): an endpoint adds evidence only once its
-map point has been observed by --min-views keyframes (default 3; that keyframe also adds the
-deferred evidence), eq 13 floored at P_w (a confirmed point is never pushed towards free), one
-keyframe adds the mean of its endpoints in a voxel; without map-point ids it is OctoMap's model.
+map point has been observed by --min-views keyframes (default 3) and another keyframe's map point
+lies within twice the mean k-NN distance, or by two keyframes and 12 such points lie there (the
+keyframe that commits it also adds the deferred evidence), and casts its free ray from the fourth
+view on; eq 13 floored at P_w (a confirmed point is never pushed towards free), one keyframe adds
+the mean of its endpoints in a voxel; without map-point ids it is OctoMap's model.
 Takes the k-NN flags above. Prints the same knn line.
   --min-views N         keyframes that confirm a map point (default 3, in [1, 1000])
 exit status: 0 success, 2 bad input (one line on stderr naming the file and the problem).

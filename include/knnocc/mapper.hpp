@@ -372,13 +372,34 @@ class Mapper {
         const auto& e = ledger_.observe(id, world_[j], origin_, keyframe_, map_.grid());
         c.views = e.views;
         c.contradictions = e.contra;
+        c.committed = e.added != 0.0f;
         c.parallax = MapPointLedger<Key>::parallax(e, world_[j], origin_);
+        if constexpr (detail::has_support<Model>::value) {
+          // Counted until the point commits evidence: the support decision is taken once.
+          const double r = c.committed ? 0.0 : model_.support_radius(c.views, dist);
+          if (r > 0) c.support = count_support(id, e.first, r);
+        }
       }
       ratings_[j] = model_.rate(c, dist);
       ++ks.rated;
       ks.unrated += std::isnan(c.s);
       ks.rays += ratings_[j].casts_ray;
     }
+  }
+
+  // Map points within r of map point `id` (the tracker's cloud) that a keyframe other than
+  // `first` created (PointContext::support).
+  std::uint32_t count_support(std::uint64_t id, std::size_t first, double r) {
+    if (!tracker_.contains(id)) return 0;
+    tracker_.radius(tracker_.position(id), r * r, near_);
+    std::uint32_t n = 0;
+    for (const auto i : near_) {
+      const std::uint64_t other = tracker_.id_at(i);
+      if (other == id) continue;
+      const auto* e = ledger_.find(other);
+      n += e == nullptr || e->first != first;
+    }
+    return n;
   }
 
   // After a contextual model's scan: the evidence each map point added, then the free-space
@@ -390,10 +411,12 @@ class Mapper {
       if (auto* e = ledger_.find(point_ids_[j])) e->added += ratings_[j].logodds;
     }
     if constexpr (detail::has_rejects<Model>::value)
-      ledger_.contradict(
-          origin_, world_, ratings_, keyframe_, model_.contradiction_radius(),
-          model_.contradiction_margin(), map_,
-          [&](std::uint32_t views, std::uint32_t contra) { return model_.rejects(views, contra); });
+      if (model_.contradiction_radius() > 0)
+        ledger_.contradict(origin_, world_, ratings_, keyframe_, model_.contradiction_radius(),
+                           model_.contradiction_margin(), map_,
+                           [&](std::uint32_t views, std::uint32_t contra) {
+                             return model_.rejects(views, contra);
+                           });
   }
 
   MapperOptions options_;
@@ -416,6 +439,7 @@ class Mapper {
   std::vector<EndpointRating> kept_ratings_;
   std::vector<Key> keys_;
   std::vector<unsigned char> key_ok_;
+  std::vector<std::uint32_t> near_;
   std::unordered_map<Key, std::uint32_t, KeyHash> per_voxel_;
 };
 

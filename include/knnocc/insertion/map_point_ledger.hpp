@@ -10,14 +10,17 @@
 // model rejects a point (enough contradictions), the evidence it added is taken back from its
 // voxel (re-rating earlier evidence) and it adds nothing more.
 //
+// Storage: points in one vector, found by id and by voxel through open-addressing tables
+// (core/detail/flat_index.hpp): the contradiction test looks up every voxel every ray crosses.
+//
 // Thread safety: one writer (its Mapper).
 
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
+#include "../core/detail/flat_index.hpp"
 #include "../core/key.hpp"
 #include "../core/point3.hpp"
 #include "../map/occupancy_map.hpp"
@@ -35,6 +38,7 @@ class MapPointLedger {
     bool has_key = false;         ///< inside the key range
     std::uint32_t views = 0;      ///< keyframes that observed it
     std::uint32_t contra = 0;     ///< keyframes whose rays contradict it
+    std::size_t first = 0;        ///< the keyframe that observed it first (created it)
     std::size_t last = 0;         ///< the latest keyframe that observed it
     std::size_t last_contra = 0;  ///< the latest keyframe that contradicted it (+1; 0: none)
     float dir[3] = {0, 0, 0};     ///< first viewing direction (unit)
@@ -46,10 +50,17 @@ class MapPointLedger {
   /// returns it with views counted once per keyframe.
   Point& observe(std::uint64_t id, const Point3d& p, const Point3d& origin, std::size_t keyframe,
                  const Grid<Key>& grid) {
-    auto [it, fresh] = points_.try_emplace(id);
-    Point& e = it->second;
+    bool fresh = false;
+    const std::uint32_t i =
+        index_.find_or_insert(id, static_cast<std::uint32_t>(points_.size()), fresh);
+    if (fresh) {
+      points_.emplace_back();
+      ids_.push_back(id);
+    }
+    Point& e = points_[i];
     if (fresh) {
       e.position = p;
+      e.first = keyframe;
       const double dx = p.x - origin.x, dy = p.y - origin.y, dz = p.z - origin.z;
       const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
       if (r > 0) {
@@ -58,7 +69,13 @@ class MapPointLedger {
         e.dir[2] = static_cast<float>(dz / r);
       }
       e.has_key = grid.point_to_key(p, e.key);
-      if (e.has_key) by_voxel_[e.key].push_back(id);
+      if (e.has_key) {
+        bool new_cell = false;
+        const std::uint32_t c = cells_.find_or_insert(
+            e.key.pack(), static_cast<std::uint32_t>(cell_points_.size()), new_cell);
+        if (new_cell) cell_points_.emplace_back();
+        cell_points_[c].push_back(i);
+      }
     }
     if (fresh || e.last != keyframe) {
       ++e.views;
@@ -98,9 +115,9 @@ class MapPointLedger {
       const Point3f stop =
           detail::to_point3f(Point3d{origin.x + ux * f, origin.y + uy * f, origin.z + uz * f});
       for_each_ray_key(map.grid(), o, stop, [&](const Key& k) {
-        const auto cell = by_voxel_.find(k);
-        if (cell == by_voxel_.end()) return;
-        for (const std::uint64_t id : cell->second) {
+        const std::uint32_t cell = cells_.find(k.pack());
+        if (cell == detail::FlatIndex::kNone) return;
+        for (const std::uint32_t id : cell_points_[cell]) {
           Point& p = points_[id];
           if (p.last == keyframe || p.last_contra == keyframe + 1 || p.rejected) continue;
           const double px = p.position.x - origin.x, py = p.position.y - origin.y,
@@ -115,7 +132,7 @@ class MapPointLedger {
       });
     }
     std::size_t rejected = 0;
-    for (const std::uint64_t id : touched_) {
+    for (const std::uint32_t id : touched_) {
       Point& p = points_[id];
       if (p.rejected || !rejects(p.views, p.contra)) continue;
       p.rejected = true;
@@ -127,20 +144,27 @@ class MapPointLedger {
   }
 
   const Point* find(std::uint64_t id) const {
-    const auto it = points_.find(id);
-    return it == points_.end() ? nullptr : &it->second;
+    const std::uint32_t i = index_.find(id);
+    return i == detail::FlatIndex::kNone ? nullptr : &points_[i];
   }
   Point* find(std::uint64_t id) {
-    const auto it = points_.find(id);
-    return it == points_.end() ? nullptr : &it->second;
+    const std::uint32_t i = index_.find(id);
+    return i == detail::FlatIndex::kNone ? nullptr : &points_[i];
   }
   std::size_t size() const { return points_.size(); }
-  const std::unordered_map<std::uint64_t, Point>& points() const { return points_; }
+  /// Calls f(id, point) for every map point, in the order of their first observation.
+  template <class F>
+  void for_each(F&& f) const {
+    for (std::size_t i = 0; i < points_.size(); ++i) f(ids_[i], points_[i]);
+  }
 
  private:
-  std::unordered_map<std::uint64_t, Point> points_;
-  std::unordered_map<Key, std::vector<std::uint64_t>, KeyHash> by_voxel_;
-  std::vector<std::uint64_t> touched_;
+  std::vector<Point> points_;
+  std::vector<std::uint64_t> ids_;
+  detail::FlatIndex index_;  // id -> index in points_ (ids are never 2^64-1: KeyframeUnion::kNoId)
+  detail::FlatIndex cells_;  // packed voxel key -> index in cell_points_
+  std::vector<std::vector<std::uint32_t>> cell_points_;
+  std::vector<std::uint32_t> touched_;
 };
 
 }  // namespace knnocc

@@ -23,6 +23,12 @@ struct PointContext {
   std::size_t keyframe = 0;  ///< index of the keyframe (0 for the first)
   /// Other keyframes whose rays passed through the map point (insertion/map_point_ledger.hpp).
   std::uint32_t contradictions = 0;
+  /// The map point has added occupied evidence before this keyframe.
+  bool committed = false;
+  /// Independent support: other map points within the model's support radius
+  /// (sensor_model.hpp: support_radius) that a keyframe other than this point's creator (its
+  /// first observer) created; the largest value when not counted (e.g. once committed).
+  std::uint32_t support = std::numeric_limits<std::uint32_t>::max();
 };
 
 }  // namespace knnocc

@@ -6,15 +6,30 @@
 //
 //   - multi-view support: an endpoint whose map point has been observed by fewer than min_views
 //     keyframes adds nothing and casts no ray yet (a wrong match is mostly seen by one keyframe);
-//   - re-rating at confirmation: the keyframe that brings a map point to min_views adds the
-//     evidence the earlier, deferred observations would have added (min_views times its own);
+//   - re-rating at confirmation: the first keyframe whose endpoint of a map point adds evidence
+//     (normally the one that brings it to min_views) adds what the earlier, deferred observations
+//     would have added (views times its own);
+//   - independent support at a second scale: a confirmed map point commits evidence only once at
+//     least min_support other map points within support_scale * mu (mu: the mean of the k-NN
+//     distances s) were created by keyframes other than its own creator; until then it is
+//     deferred like an unconfirmed one, and the count is taken again at each observation as the
+//     cloud grows. A wrong patch is a few points of one keyframe's stereo matching sharing one
+//     depth error, with nothing else near: s at the paper's k cannot tell it from sparse real
+//     structure, which other keyframes' points soon surround;
+//   - early commitment: a map point seen by early_views (2) keyframes commits already when
+//     early_support (12) independent points surround it (sparse views of dense real structure;
+//     a wrong patch has none);
 //   - s: a confirmed endpoint's probability is eq 13's, but never below P_w (a point several
 //     keyframes agree on is not pushed towards free, however sparse its neighbourhood);
+//   - free rays from ray_views (4) views on: a map point three keyframes agree on adds occupied
+//     evidence, but carves space only once a fourth one does (fewer wrongly carved voxels in the
+//     simulator, fewer lost and free multi-view voxels on the real stereo set);
 //   - one keyframe's endpoints in one voxel add their mean, not their sum (eq 15 bounded: a patch
 //     of wrong matches cannot outvote the rays through it);
-//   - free-space evidence: an endpoint whose voxel already holds log-odds below free_veto (rays
-//     of other keyframes crossed it) adds no occupied evidence, unless its map point has at least
-//     veto_views views;
+//   - free-space evidence, both off by default (measured in the bench, they no longer pay): an
+//     endpoint whose voxel already holds log-odds below free_veto adds no occupied evidence
+//     unless its map point has veto_views views; contra_min other keyframes' rays passing
+//     through a map point take its evidence back (insertion/map_point_ledger.hpp);
 //   - without map-point ids (dense sensors: depth cameras, LiDAR) there is no multi-view support:
 //     every endpoint is rated as OctoMap's model rates it (hit, ray), so dense input keeps its
 //     structure (the paper's s-rating removes far, sparser surfaces there).
@@ -41,6 +56,7 @@ namespace knnocc {
 struct RobustModelParams {
   KnnModelParams knn = {};      ///< eq 13 for the s part (k, w, P_u, P_w, free probability)
   std::uint32_t min_views = 3;  ///< keyframes that confirm a map point (1: no deferral)
+  std::uint32_t ray_views = 4;  ///< a committed endpoint casts its ray from this many views on
   bool rerate = true;           ///< the confirming keyframe adds the deferred evidence
   bool use_s = true;            ///< eq 13 (floored at P_w); false: OctoMap's hit for all
   bool bound_voxel = true;      ///< one keyframe adds the mean of its endpoints in a voxel
@@ -50,13 +66,21 @@ struct RobustModelParams {
   /// Free-space evidence (insertion/map_point_ledger.hpp): a map point is rejected, and its
   /// evidence taken back, once at least contra_min other keyframes' rays passed within
   /// contra_radius of it and ended more than contra_margin beyond it, and at least contra_ratio
-  /// times its views did (contra_min 0: off).
-  std::uint32_t contra_min = 2;
+  /// times its views did (contra_min 0: off, the default: with independent support it no longer
+  /// pays, and its ray walk costs a fifth of the model's time; bench/bench_robust_model.cpp).
+  std::uint32_t contra_min = 0;
   double contra_ratio = 0.5;
   double contra_radius = 0.05;  ///< m
   double contra_margin = 0.3;   ///< m
   /// Lowest probability of a confirmed endpoint (s part): P_w by default; 0.5 adds nothing
   double p_floor = -1;  ///< < 0: P_w
+  /// Independent support at a second scale (see above; support_scale 0 or min_support 0: off).
+  double support_scale = 2.0;
+  std::uint32_t min_support = 1;
+  /// A map point with early_views (< min_views) views commits once early_support independent
+  /// points surround it (early_views 0: off): real structure seen twice in a dense region.
+  std::uint32_t early_views = 2;
+  std::uint32_t early_support = 12;
 
   void validate() const {
     knn.validate();
@@ -71,6 +95,8 @@ struct RobustModelParams {
       detail::invalid_argument(
           "contradiction: ratio in [0, 100], radius in [0, 10) m, margin in "
           "[0, 100) m");
+    if (!(support_scale >= 0 && support_scale <= 100) || min_support > 100000)
+      detail::invalid_argument("support: scale in [0, 100], min_support in [0, 100000]");
     if (std::isnan(free_veto) || free_veto > 0)
       detail::invalid_argument("free_veto must be <= 0 (or -inf: off)");
   }
@@ -85,6 +111,7 @@ class RobustModel {
     params_.validate();
     hit_ = static_cast<float>(logodds(params_.p_hit));
     floor_ = logodds(params_.p_floor < 0 ? params_.knn.p_w : params_.p_floor);
+    ray_views_ = std::max(params_.ray_views, params_.min_views);
   }
 
   const RobustModelParams& params() const { return params_; }
@@ -95,17 +122,21 @@ class RobustModel {
   EndpointRating rate(const PointContext& c, const RunningNormal& dist) const {
     if (c.views == 0)  // no map-point ids: OctoMap's model (one hit per voxel and scan)
       return EndpointRating{c.in_voxel > 1 ? hit_ / static_cast<float>(c.in_voxel) : hit_, true};
-    if (c.views < params_.min_views || rejects(c.views, c.contradictions))
+    const bool early = params_.early_views > 0 && c.views >= params_.early_views &&
+                       c.support != std::numeric_limits<std::uint32_t>::max() &&
+                       c.support >= params_.early_support;
+    if ((c.views < params_.min_views && !early) || rejects(c.views, c.contradictions) ||
+        c.support < params_.min_support)
       return EndpointRating{0.0f, false};
     double l = hit_;
     if (params_.use_s) {
       const double p = knn_.probability(c.s, dist);
       l = std::max(static_cast<double>(logodds(p)), floor_);
     }
-    if (params_.rerate && c.views == params_.min_views) l *= params_.min_views;
+    if (params_.rerate && !c.committed) l *= c.views;
     if (c.voxel_logodds < params_.free_veto && c.views < params_.veto_views) l = 0.0;
     if (params_.bound_voxel && c.in_voxel > 1) l /= c.in_voxel;
-    return EndpointRating{static_cast<float>(l), true};
+    return EndpointRating{static_cast<float>(l), c.views >= ray_views_};
   }
 
   /// Free-space evidence outweighs the point's views (see RobustModelParams::contra_min).
@@ -113,7 +144,18 @@ class RobustModel {
     return params_.contra_min > 0 && contradictions >= params_.contra_min &&
            contradictions >= params_.contra_ratio * views;
   }
-  double contradiction_radius() const { return params_.contra_radius; }
+  /// 0 when the contradiction test is off (Mapper then walks no rays for it).
+  double contradiction_radius() const { return params_.contra_min > 0 ? params_.contra_radius : 0; }
+  /// Radius (m) to count an endpoint's independent support in (PointContext::support); 0: not
+  /// needed (support off, or the endpoint is not confirmed).
+  double support_radius(std::uint32_t views, const RunningNormal& dist) const {
+    const std::uint32_t from = params_.early_views > 0
+                                   ? std::min(params_.early_views, params_.min_views)
+                                   : params_.min_views;
+    if (params_.support_scale <= 0 || params_.min_support == 0 || views < from || dist.count() == 0)
+      return 0.0;
+    return params_.support_scale * dist.mean();
+  }
   double contradiction_margin() const { return params_.contra_margin; }
 
  private:
@@ -121,6 +163,7 @@ class RobustModel {
   KnnModel knn_;
   float hit_ = 0.0f;
   double floor_ = 0.0;
+  std::uint32_t ray_views_ = 1;
 };
 
 }  // namespace knnocc

@@ -76,7 +76,8 @@ struct has_context_rate<
 // Optional for a contextual model: free-space evidence against map points, with
 //   bool rejects(std::uint32_t views, std::uint32_t contradictions) const;
 //   double contradiction_radius() const;  double contradiction_margin() const;
-// (insertion/map_point_ledger.hpp); a rejected point's earlier evidence is taken back.
+// (insertion/map_point_ledger.hpp); a rejected point's earlier evidence is taken back. A radius
+// of 0 turns the test off.
 template <class M, class = void>
 struct has_rejects : std::false_type {};
 template <class M>
@@ -85,6 +86,15 @@ struct has_rejects<M,
                                decltype(double(std::declval<const M&>().contradiction_radius())),
                                decltype(double(std::declval<const M&>().contradiction_margin()))>>
     : std::true_type {};
+
+// Optional for a contextual model: support at a second scale, with
+//   double support_radius(std::uint32_t views, const RunningNormal& dist) const;
+// (> 0: Mapper counts the other map points within that radius into PointContext::support).
+template <class M, class = void>
+struct has_support : std::false_type {};
+template <class M>
+struct has_support<M, std::void_t<decltype(double(std::declval<const M&>().support_radius(
+                          1u, std::declval<const RunningNormal&>())))>> : std::true_type {};
 
 /// Compiles only for a type that meets the sensor-model concept; the message names what is
 /// missing.

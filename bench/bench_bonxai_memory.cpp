@@ -13,10 +13,6 @@
 // knnocc walks rays exactly (every voxel a ray crosses, as OctoMap); Bonxai steps one voxel per
 // longest axis, so it knows fewer free voxels for the same clouds: hence per known voxel.
 
-#include <malloc.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -52,24 +48,8 @@ struct Measure {
 // child gained over what it started with.
 template <class F>
 Measure in_child(F f) {
-  int fd[2];
-  if (pipe(fd) != 0) std::exit(2);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    malloc_trim(0);
-    const bool reset = knnocc::bench::reset_peak_rss();
-    const double start = knnocc::bench::resident_mb();
-    Measure m = f();
-    m.added_mb = reset ? knnocc::bench::peak_rss_mb() - start : 0;
-    if (write(fd[1], &m, sizeof m) != static_cast<ssize_t>(sizeof m)) _exit(1);
-    _exit(0);
-  }
-  close(fd[1]);
-  Measure m{};
-  if (read(fd[0], &m, sizeof m) != static_cast<ssize_t>(sizeof m)) m = Measure{};
-  close(fd[0]);
-  int status = 0;
-  waitpid(pid, &status, 0);
+  auto [m, added_mb] = knnocc::bench::in_child(f);
+  m.added_mb = added_mb;
   return m;
 }
 

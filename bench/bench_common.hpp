@@ -1,7 +1,11 @@
 #pragma once
-// What the bench programs share: a monotonic clock in seconds, the resident memory, the scan.dat
-// dataset, and liboctomap's insertion as the baseline (KNNOCC_HAVE_OCTOMAP builds).
+// What the bench programs share: a monotonic clock in seconds, the resident memory, a run in a
+// forked child measuring the peak memory it adds, the scan.dat dataset, and liboctomap's insertion
+// as the baseline (KNNOCC_HAVE_OCTOMAP builds).
 
+#include <malloc.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -9,6 +13,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <knnocc/core/point3.hpp>
@@ -89,6 +95,44 @@ inline double peak_rss_mb() {
     std::fclose(f);
   }
   return kb / 1024.0;
+}
+
+/// Runs f() in a forked child; returns its result (trivially copyable: sent through a pipe) and
+/// the peak RSS in MB it added to what the child had when it started (the datasets, inherited
+/// from the caller). The child's peak is reset first: a forked child inherits the parent's peak,
+/// which would hide a small insertion.
+template <class F>
+auto in_child(F f) -> std::pair<decltype(f()), double> {
+  using Result = decltype(f());
+  static_assert(std::is_trivially_copyable_v<Result>, "in_child sends the result through a pipe");
+  struct Message {
+    Result result;
+    double added_mb;
+  };
+  int fd[2];
+  if (pipe(fd) != 0) std::exit(2);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    Message m;
+    malloc_trim(0);  // heap left free by earlier runs would hide the child's own allocations
+    const bool reset = reset_peak_rss();
+    const double start_mb = resident_mb();
+    m.result = f();
+    struct rusage ru {};
+    getrusage(RUSAGE_SELF, &ru);
+    // Without the reset (not Linux) the peak since the fork is all there is.
+    const double peak_mb = reset ? peak_rss_mb() : ru.ru_maxrss / 1024.0;
+    m.added_mb = peak_mb - start_mb;
+    if (write(fd[1], &m, sizeof m) != static_cast<ssize_t>(sizeof m)) _exit(1);
+    _exit(0);
+  }
+  close(fd[1]);
+  Message m{};
+  if (read(fd[0], &m, sizeof m) != static_cast<ssize_t>(sizeof m)) m = Message{};
+  close(fd[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return {m.result, m.added_mb};
 }
 
 #if KNNOCC_HAVE_OCTOMAP

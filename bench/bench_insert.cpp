@@ -16,11 +16,7 @@
 //   one vCPU ran the same insertion at 0.148 s while the other ran it at 0.090 s, so unpinned
 //   one-thread runs of the two libraries could meet different CPUs.
 
-#include <malloc.h>
 #include <sched.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -47,6 +43,7 @@ using knnocc::Point3f;
 
 namespace {
 
+using knnocc::bench::in_child;
 using knnocc::bench::now;
 using knnocc::bench::scan_dat;
 
@@ -127,8 +124,6 @@ Result run_octomap(const Dataset& d, const std::vector<octomap::Pointcloud>& clo
 }
 #endif
 
-using knnocc::bench::resident_mb;
-
 // Pins the calling thread (and the children it forks) to one CPU while it lives; restores the
 // thread's CPU set afterwards. Does nothing where the CPU set cannot be read or set.
 class PinnedToCpu {
@@ -150,41 +145,6 @@ class PinnedToCpu {
   cpu_set_t saved_{};
   bool pinned_ = false;
 };
-
-// Runs f() in a forked child; returns its result (sent through a pipe) and the peak RSS it added
-// to what the child had when it started (the datasets, inherited from here). The child's peak is
-// reset first: a forked child inherits the parent's peak, which would hide a small insertion.
-template <class F>
-std::pair<Result, double> in_child(F f) {
-  struct Message {
-    Result result;
-    double added_mb;
-  };
-  int fd[2];
-  if (pipe(fd) != 0) std::exit(2);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    Message m;
-    malloc_trim(0);  // heap left free by earlier runs would hide the child's own allocations
-    const bool reset = knnocc::bench::reset_peak_rss();
-    const double start_mb = resident_mb();
-    m.result = f();
-    struct rusage ru {};
-    getrusage(RUSAGE_SELF, &ru);
-    // Without the reset (not Linux) the peak since the fork is all there is.
-    const double peak_mb = reset ? knnocc::bench::peak_rss_mb() : ru.ru_maxrss / 1024.0;
-    m.added_mb = peak_mb - start_mb;
-    if (write(fd[1], &m, sizeof m) != static_cast<ssize_t>(sizeof m)) _exit(1);
-    _exit(0);
-  }
-  close(fd[1]);
-  Message m{};
-  if (read(fd[0], &m, sizeof m) != static_cast<ssize_t>(sizeof m)) m = Message{};
-  close(fd[0]);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return {m.result, m.added_mb};
-}
 
 }  // namespace
 

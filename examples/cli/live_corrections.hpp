@@ -106,12 +106,9 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
       opt.res, model, MapperOptions{opt.max_range, opt.discretize, opt.threads, {}});
   live.set_memory_limit(map_memory_share(opt.memory_limit));  // rebuilds and replays included
   auto out_of_memory = [&](std::size_t i) {
-    char res_text[32];
-    std::snprintf(res_text, sizeof res_text, "%g", opt.res);
     return io::Error(source.path(),
-                     "keyframe " + std::to_string(i) + ": out of memory (--memory-limit " +
-                         format_bytes(opt.memory_limit) + ") mapping or correcting at --res " +
-                         res_text + "; a higher --memory-limit, or a coarser --res or --crop");
+                     "keyframe " + std::to_string(i) + ": " +
+                         out_of_memory_text(opt.memory_limit, "mapping or correcting", opt.res));
   };
   std::size_t points = 0, reposed = 0;
   std::vector<double> correction_ms;

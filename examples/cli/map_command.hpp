@@ -248,9 +248,8 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
       throw too_big(i, "the map needs more memory");
     } catch (const std::bad_alloc&) {
       throw io::Error(source_path_for_errors(opt.input, i),
-                      std::string("out of memory (--memory-limit ") +
-                          format_bytes(opt.memory_limit) + ") reading or mapping it at --res " +
-                          res_text + "; a higher --memory-limit, or a coarser --res or --crop");
+                      out_of_memory_text(opt.memory_limit, "reading or mapping it",
+                                         mapper.map().grid().resolution()));
     }
   progress.finish();
   const auto& map = mapper.map();

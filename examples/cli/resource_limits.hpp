@@ -67,6 +67,15 @@ inline std::string format_bytes(double bytes) {
   return s;
 }
 
+/// What map says when an allocation fails under --memory-limit: "out of memory (--memory-limit
+/// 1.0 GB) <doing> at --res 0.1; a higher --memory-limit, or a coarser --res or --crop".
+inline std::string out_of_memory_text(double limit, const char* doing, double res) {
+  char res_text[32];
+  std::snprintf(res_text, sizeof res_text, "%g", res);
+  return "out of memory (--memory-limit " + format_bytes(limit) + ") " + doing + " at --res " +
+         res_text + "; a higher --memory-limit, or a coarser --res or --crop";
+}
+
 /// The memory this machine gives the process: physical memory, lowered by an address-space
 /// limit and a cgroup (container) limit where set.
 inline double machine_memory() {

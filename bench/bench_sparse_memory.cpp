@@ -1,7 +1,8 @@
 // bench_sparse_memory: memory per known voxel for sparse long rays (points spread over +-R
 // around the sensor), knnocc's brick storage against liboctomap's octree on the same scan.
 //   bench_sparse_memory [points=2000] [range_m=4000] [res=1] [octomap=1]
-// Prints known voxels, bytes and bytes per known voxel for both, and the ratio. knnocc's figure is
+// Prints known voxels, bytes and bytes per known voxel for both, and the ratio; for knnocc also
+// the insertion time and the process's peak resident memory. knnocc's figure is
 // OccupancyMap::memory_usage(); OctoMap's is OcTree::memoryUsage() (its own estimate of nodes and
 // child-pointer arrays). octomap=0 skips liboctomap (the 20,000-point probe: about 118 M
 // known voxels, some 11 GB for liboctomap at the 95 bytes per known voxel it takes at 200 points,
@@ -14,6 +15,8 @@
 
 #include <knnocc/insertion/scan_inserter.hpp>
 #include <knnocc/map/occupancy_map.hpp>
+
+#include "bench_common.hpp"
 
 #ifdef KNNOCC_HAVE_OCTOMAP
 #include <octomap/OcTree.h>
@@ -32,11 +35,16 @@ int main(int argc, char** argv) {
   for (auto& p : pts) p = {u(rng), u(rng), u(rng)};
 
   knnocc::OccupancyMap<knnocc::OcKey> map(res);
+  const double t0 = knnocc::bench::now();
   knnocc::insert_point_cloud(map, knnocc::Point3f{0, 0, 0}, pts);
+  const double seconds = knnocc::bench::now() - t0;
   const double ours = static_cast<double>(map.memory_usage());
   const double known = static_cast<double>(map.num_voxels());
   std::printf("knnocc   known %12.0f voxels  bricks %10zu  %10.1f MB  %7.1f bytes/known voxel\n",
               known, map.num_bricks(), ours / 1e6, ours / known);
+  // The process's peak so far: the map and the insertion's scratch (and the points).
+  std::printf("knnocc   insertion %.2f s, process peak RSS %.1f MB\n", seconds,
+              knnocc::bench::peak_rss_mb());
   map.compact();
   const double compacted = static_cast<double>(map.memory_usage());
   std::printf(

@@ -23,6 +23,29 @@ expect() {
 }
 no_temporaries() { ! ls -a | grep -q '\.tmp-' || fail "temporary left behind: $(ls -a | grep '\.tmp-')"; }
 
+# zeros_pcd [broken]: zeros.pcd, a 4 MB compressed PCD of 33 M points that expands to 400 MB;
+# "broken" turns one reference in the middle into a literal run, so the stream no longer adds up.
+zeros_pcd() {
+  python3 - "${1:-}" <<'PY' || { echo "SKIPPED: no python3"; exit 0; }
+import struct, sys
+n = 33_333_333; raw = n * 12
+body = bytearray(b"\x00\x00")  # one literal zero byte
+left = raw - 1
+while left >= 3:
+    ln = min(left, 264)
+    body += bytes([0xE0, ln - 9, 0x00]) if ln >= 9 else bytes([(ln - 2) << 5, 0x00])
+    left -= ln
+assert left == 0 or left < 3
+if left:
+    body += bytes([left - 1]) + b"\x00" * left
+if sys.argv[1] == "broken":
+    body[2 + 3 * (len(body) // 6)] = 0x1F
+head = ("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH %d\nHEIGHT 1\n"
+        "POINTS %d\nDATA binary_compressed\n" % (n, n)).encode()
+open("zeros.pcd", "wb").write(head + struct.pack("<II", len(body), raw) + bytes(body))
+PY
+}
+
 case "$CASE" in
   missing_output_dir)  # fails before mapping: nothing written
     expect 2 "missing_dir/a.bt: folder 'missing_dir' does not exist" \
@@ -123,23 +146,12 @@ case "$CASE" in
     expect 2 "room.xyz: .*--memory-limit 500 MB" timeout 30 "$K" map --input room.xyz --res 0.0001 --memory-limit 500M ;;
   memory_out_of_memory)  # a 4 MB compressed PCD that expands to 400 MB, under a 200 MB limit
     [ -z "${KNNOCC_TOOL_SANITIZED:-}" ] || { echo "SKIPPED: sanitizer build, no address-space limit"; exit 0; }
-    python3 - <<'PY' || { echo "SKIPPED: no python3"; exit 0; }
-import struct
-n = 33_333_333; raw = n * 12
-body = bytearray(b"\x00\x00")  # one literal zero byte
-left = raw - 1
-while left >= 3:
-    ln = min(left, 264)
-    body += bytes([0xE0, ln - 9, 0x00]) if ln >= 9 else bytes([(ln - 2) << 5, 0x00])
-    left -= ln
-assert left == 0 or left < 3
-if left:
-    body += bytes([left - 1]) + b"\x00" * left
-head = ("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH %d\nHEIGHT 1\n"
-        "POINTS %d\nDATA binary_compressed\n" % (n, n)).encode()
-open("zeros.pcd", "wb").write(head + struct.pack("<II", len(body), raw) + bytes(body))
-PY
+    zeros_pcd
     expect 2 "zeros.pcd: out of memory \(--memory-limit 200 MB\)" timeout 30 "$K" map --input zeros.pcd --res 0.1 --memory-limit 200M ;;
+  memory_broken_compressed)  # the same file, broken: the stream is checked before allocating
+    zeros_pcd broken
+    expect 2 "zeros.pcd: corrupt binary_compressed data: LZF data decodes to [0-9]+ bytes, not the declared 399999996" \
+      timeout 30 "$K" map --input zeros.pcd --res 0.1 --memory-limit 200M ;;
   memory_corrections)  # the live mapper of --corrections holds the limit too
     "$K" sim --out seq --seed 3 --keyframes 12 --drift 0.3 > /dev/null || fail "sim"
     expect 2 "seq: keyframe [0-9]+: out of memory \(--memory-limit 64 MB\) mapping or correcting at --res 0.002" \

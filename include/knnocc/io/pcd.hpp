@@ -11,17 +11,21 @@
 // NaN/Inf coordinates are returned as read (the mapping layer skips and counts them). Every
 // problem with the file (bad header, unknown types, wrong counts, truncated data, a corrupt or
 // lying LZF block) throws io::Error naming the file; POINTS and the declared uncompressed size
-// are checked against the bytes present before anything is allocated.
+// are checked against the bytes present before anything is allocated. A binary_compressed
+// block is checked whole (io/detail/lzf.hpp: lzf_check) before the cloud is allocated, then
+// decoded piece by piece straight into it: peak memory is the file plus the cloud.
 //
 // Writing produces "FIELDS x y z" (+ "id" as U 4) as ascii, binary or binary_compressed,
 // atomically (temp file + rename).
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <limits>
 #include <string>
 #include <unordered_set>
+#include <utility>
 #include <vector>
 
 #include "atomic_file.hpp"
@@ -260,6 +264,82 @@ inline Cloud pcd_gather(const std::string& path, const PcdHeader& h, std::size_t
   return cloud;
 }
 
+// binary_compressed data holds the fields one after another (field f's values from byte
+// n * offset_f, one per point, size * count bytes apart). PcdFieldBlocks fills a cloud from
+// consecutive pieces of that data, in order: a value split between two pieces is carried over.
+struct PcdFieldBlocks {
+  PcdFieldBlocks(const std::string& file, const PcdHeader& h, std::size_t n) : path(file) {
+    cloud.points.resize(n);
+    if (h.id >= 0) cloud.ids.resize(n);
+    const int slots[4] = {h.x, h.y, h.z, h.id};
+    for (int k = 0; k < 4; ++k) {
+      if (slots[k] < 0) continue;
+      Block& b = blocks[used++];
+      b.slot = k;
+      b.field = &h.fields[static_cast<std::size_t>(slots[k])];
+      b.begin = std::uint64_t{n} * b.field->offset;
+      b.stride = b.field->size * b.field->count;
+      b.end = b.begin + std::uint64_t{n} * b.stride;
+    }
+  }
+
+  // Bytes [offset, offset + size) of the decoded data.
+  void take(std::uint64_t offset, const unsigned char* data, std::size_t size) {
+    const std::uint64_t stop = offset + size;
+    for (int k = 0; k < used; ++k) {
+      Block& b = blocks[k];
+      std::uint64_t at = std::max(offset, b.begin);
+      const std::uint64_t last = std::min(stop, b.end);
+      const std::size_t value = b.field->size;
+      while (at < last) {
+        const std::uint64_t i = (at - b.begin) / b.stride;
+        const std::size_t within = static_cast<std::size_t>((at - b.begin) % b.stride);
+        if (within >= value) {  // the point's further values (COUNT > 1): not read
+          at += b.stride - within;
+          continue;
+        }
+        if (within == 0 && at + value <= last) {  // whole values in this piece
+          for (std::uint64_t j = i; at + value <= last; at += b.stride, ++j) {
+            store(b, static_cast<std::size_t>(j), data + (at - offset));
+          }
+          continue;
+        }
+        const std::size_t part =
+            static_cast<std::size_t>(std::min<std::uint64_t>(value - within, last - at));
+        std::memcpy(b.carry + within, data + (at - offset), part);
+        at += part;
+        if (within + part == value) store(b, static_cast<std::size_t>(i), b.carry);
+      }
+    }
+  }
+
+  std::string path;
+  Cloud cloud;
+
+ private:
+  struct Block {
+    int slot = 0;  // 0-2: x, y, z; 3: id
+    const PcdField* field = nullptr;
+    std::uint64_t begin = 0, end = 0;
+    std::size_t stride = 0;
+    unsigned char carry[8] = {};  // a value split between two pieces
+  };
+
+  void store(const Block& b, std::size_t i, const unsigned char* p) {
+    if (b.slot < 3) {
+      const float v = pcd_coord(p, *b.field);
+      (b.slot == 0 ? cloud.points[i].x : b.slot == 1 ? cloud.points[i].y : cloud.points[i].z) = v;
+      return;
+    }
+    const std::int64_t id = pcd_integer(p, *b.field);
+    if (id < 0) throw Error(path, "point " + std::to_string(i) + " has a negative or huge id");
+    cloud.ids[i] = static_cast<std::uint64_t>(id);
+  }
+
+  Block blocks[4];
+  int used = 0;
+};
+
 inline Cloud read_pcd_binary(const std::string& path, const PcdHeader& h, const unsigned char* p,
                              std::size_t remaining) {
   const std::uint64_t points = h.info.points;
@@ -296,16 +376,18 @@ inline Cloud read_pcd_binary(const std::string& path, const PcdHeader& h, const 
     throw Error(path, "compressed block of " + std::to_string(packed) +
                           " bytes cannot hold the declared " + std::to_string(raw) + " bytes");
   }
-  std::vector<unsigned char> buf(raw);
-  const std::string problem = lzf_decompress(p + 8, packed, buf.data(), buf.size());
+  // The stream is checked before anything is allocated for it, then decoded piece by piece
+  // straight into the cloud: memory is the cloud, not the cloud plus the decoded fields.
+  const std::string problem = lzf_check(p + 8, packed, raw);
   if (!problem.empty()) throw Error(path, "corrupt binary_compressed data: " + problem);
   const std::size_t n = static_cast<std::size_t>(points);
-  for (int k = 0; k < 4; ++k) {  // fields one after another: field f starts at n * offset_f
-    const PcdField& f = h.fields[static_cast<std::size_t>(slots[k])];
-    base[k] = buf.data() + n * f.offset;
-    stride[k] = f.size * f.count;
-  }
-  return pcd_gather(path, h, n, base, stride);
+  PcdFieldBlocks blocks(path, h, n);
+  LzfPieces pieces([&blocks](std::uint64_t offset, const unsigned char* data, std::size_t size) {
+    blocks.take(offset, data, size);
+  });
+  lzf_decode(p + 8, packed, raw, pieces);
+  pieces.finish();
+  return std::move(blocks.cloud);
 }
 
 inline Cloud read_pcd_ascii(const std::string& path, const PcdHeader& h, const char* p,

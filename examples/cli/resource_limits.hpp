@@ -3,7 +3,7 @@
 // (--memory-limit): the limit is the process's address-space limit, so an allocation past it
 // fails as std::bad_alloc (reported in one line, exit 2) instead of the kernel killing the
 // process; the map gets its share as OccupancyMap's memory limit; work that surely cannot fit is
-// refused before it starts (at_least_bricks()).
+// refused before it starts (at_least_bricks(), at_least_bricks_by_angle()).
 
 #include <algorithm>
 #include <cmath>
@@ -174,12 +174,96 @@ inline OccupancyMap<OcKey> read_tree_checked(const std::string& path) {
 inline constexpr std::size_t kBrickBytesAtLeast =
     sizeof(OccupancyMap<OcKey>::Brick) + 2 * (sizeof(std::uint64_t) + sizeof(std::uint32_t));
 
+/// A lower bound on the bricks the rays of one scan (from `origin`, cut at max_range when > 0)
+/// pass through, from their directions and lengths alone, in one pass over the points per angle:
+///   - of two rays at least theta apart, a point at range r on one is at least r sin(theta) from
+///     the other, and two points in one brick are at most sqrt(3) * edge apart, so beyond
+///     r0 = sqrt(3) * edge / sin(theta) no brick holds both rays;
+///   - a part of length l of a ray crosses at least l / (sqrt(3) * edge) bricks.
+/// Rays pairwise at least theta apart are picked greedily (directions hashed into cells of one
+/// chord), for theta from 0.1 rad halving down to where r0 passes every ray, and the largest sum
+/// of their bricks beyond r0 is returned (less one brick per ray: a ray cut at max_range does not
+/// free its last voxel). It proves the need of the long, many rays of a fine resolution without
+/// walking them, where sampling (at_least_bricks) has to stop.
+template <class P>
+double at_least_bricks_by_angle(const Point3d& origin, const std::vector<P>& pts, double res,
+                                double max_range) {
+  const double edge = res * kBrickEdge, chord = std::sqrt(3.0) * edge;
+  const double reach = 32768.0 * res;  // the key range: farther endpoints are skipped
+  auto in_range = [&](double x, double y, double z) {
+    return std::fabs(x) < reach && std::fabs(y) < reach && std::fabs(z) < reach;
+  };
+  if (!in_range(origin.x, origin.y, origin.z)) return 0;
+  struct Ray {
+    double x, y, z, l;  // unit direction, stored length
+  };
+  std::vector<Ray> rays;
+  rays.reserve(pts.size());
+  double longest = 0;
+  for (const P& p : pts) {
+    const double dx = double(p.x) - origin.x, dy = double(p.y) - origin.y,
+                 dz = double(p.z) - origin.z;
+    const double full = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!std::isfinite(full) || full == 0 || !in_range(p.x, p.y, p.z)) continue;
+    const double l = max_range > 0 ? std::min(full, max_range) : full;
+    rays.push_back({dx / full, dy / full, dz / full, l});
+    longest = std::max(longest, l);
+  }
+  double best = 0;
+  std::vector<const Ray*> picked;
+  std::vector<std::uint32_t> last, next;  // per cell 1 + its last picked ray, then 1 + the one
+                                          // before it (0: none)
+  for (double theta = 0.1; theta > 1e-7; theta /= 2) {
+    const double r0 = chord / std::sin(theta);
+    if (r0 >= longest) break;
+    const double cell = 2 * std::sin(theta / 2);  // the chord between directions theta apart
+    const double offset = std::floor(1 / cell) + 2;
+    auto cell_of = [&](double c) {
+      return static_cast<std::uint64_t>(std::floor(c / cell) + offset);
+    };
+    knnocc::detail::FlatIndex cells;  // cell -> its slot in `last`
+    last.clear();
+    next.clear();
+    picked.clear();
+    double sum = 0;
+    for (const Ray& r : rays) {
+      if (r.l - r0 < 2 * chord) continue;  // adds nothing beyond r0
+      const std::uint64_t cx = cell_of(r.x), cy = cell_of(r.y), cz = cell_of(r.z);
+      bool apart = true;
+      for (std::uint64_t x = cx - 1; x <= cx + 1 && apart; ++x)
+        for (std::uint64_t y = cy - 1; y <= cy + 1 && apart; ++y)
+          for (std::uint64_t z = cz - 1; z <= cz + 1 && apart; ++z) {
+            const std::uint32_t slot = cells.find((x << 42) | (y << 21) | z);
+            if (slot == knnocc::detail::FlatIndex::kNone) continue;
+            for (std::uint32_t j = last[slot]; j != 0 && apart; j = next[j - 1]) {
+              const Ray& q = *picked[j - 1];
+              const double ex = q.x - r.x, ey = q.y - r.y, ez = q.z - r.z;
+              apart = ex * ex + ey * ey + ez * ez >= cell * cell;
+            }
+          }
+      if (!apart) continue;
+      bool inserted = false;
+      const std::uint32_t slot = cells.find_or_insert(
+          (cx << 42) | (cy << 21) | cz, static_cast<std::uint32_t>(last.size()), inserted);
+      if (inserted) last.push_back(0);
+      picked.push_back(&r);
+      next.push_back(last[slot]);
+      last[slot] = static_cast<std::uint32_t>(picked.size());
+      sum += std::floor((r.l - r0) / chord) - 1;
+    }
+    best = std::max(best, sum);
+    if (picked.size() == rays.size()) break;  // every ray picked: a smaller angle only loses
+  }
+  return best;
+}
+
 /// A lower bound on the bricks one scan creates: the distinct bricks holding points sampled
 /// along its rays (from `origin`, one sample per brick edge, rays cut at max_range when > 0;
 /// endpoints only when `rays` is false), each of which a ray passes through. Stops counting past
 /// `enough`. When sampling every ray would take more samples than 3 x `enough` (at most 4 M), a
-/// subset of the rays is sampled (still a lower bound: a limit far above 4 M bricks is left to
-/// the map's own memory limit); when the samples cannot reach `enough` it returns 0 at once.
+/// subset of the rays is sampled (still a lower bound), after at_least_bricks_by_angle() had its
+/// say (it returns enough + 1 when the directions prove more); when the samples cannot reach
+/// `enough` it returns 0 at once.
 template <class P>
 std::size_t at_least_bricks(const Point3d& origin, const std::vector<P>& pts, double res,
                             double max_range, bool rays, std::size_t enough) {
@@ -206,6 +290,10 @@ std::size_t at_least_bricks(const Point3d& origin, const std::vector<P>& pts, do
   // Proving more than `enough` bricks takes more than `enough` samples: sample up to three times
   // that, and at most 4 M (the set of seen bricks then stays below ~100 MB).
   const double kMaxSamples = std::min(3.0 * double(enough) + 1e6, 4e6);
+  if (rays && samples > kMaxSamples) {  // too many to walk: what the directions prove first
+    const double by_angle = at_least_bricks_by_angle(origin, pts, res, max_range);
+    if (by_angle > double(enough)) return enough + 1;
+  }
   const std::size_t stride =
       samples > kMaxSamples ? static_cast<std::size_t>(std::ceil(samples / kMaxSamples)) : 1;
   knnocc::detail::FlatIndex seen;

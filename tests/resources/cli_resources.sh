@@ -144,6 +144,11 @@ case "$CASE" in
   memory_tiny_resolution)  # a dense 2 m scan at 0.1 mm
     awk 'BEGIN { srand(2); for (i = 0; i < 50000; i++) printf "%f %f %f\n", 3*rand()-1.5, 3*rand()-1.5, 1.5 }' > room.xyz
     expect 2 "room.xyz: .*--memory-limit 500 MB" timeout 30 "$K" map --input room.xyz --res 0.0001 --memory-limit 500M ;;
+  memory_long_fine_rays)  # 20,000 rays of 3 m at 0.1 mm: refused from their directions, before mapping
+    awk 'BEGIN { srand(3); for (i = 0; i < 20000; i++) { z = 2*rand()-1; a = 6.2831853*rand(); r = sqrt(1-z*z);
+                 printf "%f %f %f\n", 3*r*cos(a), 3*r*sin(a), 3*z } }' > sphere.xyz
+    expect 2 "sphere.xyz: its rays need more than [0-9]+ bricks .*--memory-limit 1.0 GB" \
+      timeout 30 "$K" map --input sphere.xyz --res 0.0001 --memory-limit 1G ;;
   memory_out_of_memory)  # a 4 MB compressed PCD that expands to 400 MB, under a 200 MB limit
     [ -z "${KNNOCC_TOOL_SANITIZED:-}" ] || { echo "SKIPPED: sanitizer build, no address-space limit"; exit 0; }
     zeros_pcd

@@ -374,10 +374,11 @@ class Mapper {
         c.contradictions = e.contra;
         c.committed = e.added != 0.0f;
         c.parallax = MapPointLedger<Key>::parallax(e, world_[j], origin_);
+        c.span = keyframe_ - e.first;
         if constexpr (detail::has_support<Model>::value) {
           // Counted until the point commits evidence: the support decision is taken once.
           const double r = c.committed ? 0.0 : model_.support_radius(c.views, dist);
-          if (r > 0) c.support = count_support(id, e.first, r);
+          if (r > 0) c.support = count_support(id, e.first, r, c.siblings);
         }
       }
       ratings_[j] = model_.rate(c, dist);
@@ -388,8 +389,11 @@ class Mapper {
   }
 
   // Map points within r of map point `id` (the tracker's cloud) that a keyframe other than
-  // `first` created (PointContext::support).
-  std::uint32_t count_support(std::uint64_t id, std::size_t first, double r) {
+  // `first` created (PointContext::support);
+  // `siblings`: the other map points within r that `first` created (PointContext::siblings).
+  std::uint32_t count_support(std::uint64_t id, std::size_t first, double r,
+                              std::uint32_t& siblings) {
+    siblings = 0;
     if (!tracker_.contains(id)) return 0;
     tracker_.radius(tracker_.position(id), r * r, near_);
     std::uint32_t n = 0;
@@ -397,7 +401,9 @@ class Mapper {
       const std::uint64_t other = tracker_.id_at(i);
       if (other == id) continue;
       const auto* e = ledger_.find(other);
-      n += e == nullptr || e->first != first;
+      const bool independent = e == nullptr || e->first != first;
+      n += independent;
+      siblings += !independent;
     }
     return n;
   }

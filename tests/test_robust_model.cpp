@@ -367,3 +367,29 @@ TEST_CASE("robust model without map-point ids maps as the OctoMap model") {
   CHECK(robust.map().count_voxels().occupied == octo.map().count_voxels().occupied);
   CHECK(robust.map().count_voxels().free == octo.map().count_voxels().free);
 }
+
+TEST_CASE("robust model without map-point ids keeps no map point cloud") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-3.0, 3.0);
+  std::vector<Point3d> pts;
+  for (int i = 0; i < 300; ++i) pts.push_back({u(rng), u(rng), u(rng) * 0.3});
+  const std::vector<std::uint64_t> ids(pts.size(), 7);
+  Mapper<RobustModel> robust(0.1);
+  const KeyframeStats ks = robust.insert_keyframe(Point3d{0, 0, 0}, pts);
+  CHECK(ks.rated == pts.size());
+  CHECK(ks.rays == pts.size());
+  CHECK(ks.tracker.added == 0);
+  CHECK(robust.tracker().size() == 0);  // the model rates them without it
+  CHECK(robust.map_points().size() == 0);
+  CHECK(robust.map().count_voxels().occupied > 100);
+  // a sequence either always or never gives ids, both ways round
+  CHECK_THROWS_AS(robust.insert_keyframe(Point3d{0, 0, 0}, pts, ids), std::invalid_argument);
+  Mapper<RobustModel> with_ids(0.1);
+  with_ids.insert_keyframe(Point3d{0, 0, 0}, pts, ids);
+  CHECK(with_ids.tracker().size() == 1);
+  CHECK_THROWS_AS(with_ids.insert_keyframe(Point3d{0, 0, 0}, pts), std::invalid_argument);
+  // the k-NN model keeps the cloud of keyframes without ids (its s needs it)
+  Mapper<KnnModel> knn(0.1);
+  knn.insert_keyframe(Point3d{0, 0, 0}, pts);
+  CHECK(knn.tracker().size() == pts.size());
+}

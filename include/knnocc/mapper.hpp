@@ -162,7 +162,8 @@ class Mapper {
   map_type& map() { return map_; }
   const Model& model() const { return model_; }
   const MapperOptions& options() const { return options_; }
-  /// The k-NN statistics of the map point cloud (only with a model that uses them).
+  /// The k-NN statistics of the map point cloud (only with a model that uses them; empty for
+  /// keyframes without ids when the model rates them without it, as RobustModel does).
   template <bool B = uses_map_cloud, std::enable_if_t<B, int> = 0>
   const Tracker& tracker() const {
     return tracker_;
@@ -191,6 +192,20 @@ class Mapper {
     } else {
       use_mode(Mode::keyframe_union);
       if (!load(origin, points, ids, ks)) return ks;
+      if constexpr (!detail::map_cloud_without_ids<Model>::value) {
+        if (ids.empty() && !world_.empty()) {  // rated without the map cloud: none kept
+          if (ids_given_)
+            detail::invalid_argument("KeyframeUnion: keyframes with and without ids are mixed");
+          without_ids_ = true;
+          point_ids_.assign(world_.size(), KeyframeUnion::kNoId);
+          for (std::size_t j = 0; j < world_.size(); ++j)
+            if (within_range(j)) point_ids_[j] = j;  // any id: the model does not look it up
+          rate_and_insert(ks);
+          return ks;
+        }
+        if (!ids.empty() && without_ids_)
+          detail::invalid_argument("KeyframeUnion: keyframes with and without ids are mixed");
+      }
       ids_given_ = !ids.empty();
       // Points beyond max_range stay out of the map cloud (they still cast their truncated ray).
       cloud_.clear();
@@ -439,6 +454,7 @@ class Mapper {
   std::vector<EndpointRating> ratings_;
   // Contextual model only (rate_in_context).
   bool ids_given_ = false;
+  bool without_ids_ = false;  // keyframes without ids kept out of the map cloud (model's choice)
   std::size_t keyframe_ = 0;
   MapPointLedger<Key> ledger_;
   std::vector<Point3d> kept_world_;

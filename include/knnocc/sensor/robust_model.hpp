@@ -47,7 +47,8 @@
 //     through a map point take its evidence back (insertion/map_point_ledger.hpp);
 //   - without map-point ids (dense sensors: depth cameras, LiDAR) there is no multi-view support:
 //     every endpoint is rated as OctoMap's model rates it (hit, ray), so dense input keeps its
-//     structure (the paper's s-rating removes far, sparser surfaces there).
+//     structure (the paper's s-rating removes far, sparser surfaces there); Mapper then keeps no
+//     map point cloud, so its tracker() stays empty (map_cloud_without_ids).
 // Each part can be switched off in RobustModelParams to measure it (bench/bench_robust_model.cpp).
 //
 // Thread safety: immutable after construction; share it freely.
@@ -130,6 +131,9 @@ struct RobustModelParams {
 class RobustModel {
  public:
   static constexpr bool uses_map_cloud = true;
+  /// Keyframes without map-point ids are rated as OctoMap's model rates them: Mapper keeps no
+  /// map point cloud (and no k-NN statistics) for them.
+  static constexpr bool map_cloud_without_ids = false;
   using tracker_type = KnnTracker<>;
 
   explicit RobustModel(RobustModelParams params = {}) : params_(params), knn_(params.knn) {

@@ -103,13 +103,6 @@ struct Group {
   }
 };
 
-template <class Key>
-Key key_of(const Grid<Key>& g, const Point3d& p) {
-  Key k;
-  g.point_to_key(p, k);
-  return k;
-}
-
 void simulator(int seeds, const RobustModelParams& params, const char* label) {
   for (const sim::Regime& regime : sim::named_regimes()) {
     if (regime.name != "repeated" && regime.name != "realistic") continue;
@@ -179,7 +172,6 @@ void simulator(int seeds, const RobustModelParams& params, const char* label) {
         }
       }
       irrel_wrong += irr_wrong.size();
-      (void)key_of<OcKey>;
     }
     std::printf("\nregime %s, seeds 1..%d, robust model (%s)\n", regime.name.c_str(), seeds, label);
     std::printf(
@@ -319,7 +311,10 @@ void real_set(const std::string& dir) {
     if (rm.is_occupied(v) && isolated(rm, k) && max_views(k) >= 3 && occ(om, k)) ++iso_mv_octo;
   });
   const std::size_t budget = (2 * views.multiview_voxels(rm.grid(), 3).size()) / 100;
-  const std::size_t target = (163 * 50) / 100;  // the OctoMap model's isolated voxels, halved
+  std::size_t octo_isolated = 0;
+  om.for_each_voxel(
+      [&](const OcKey& k, float v) { octo_isolated += om.is_occupied(v) && isolated(om, k); });
+  const std::size_t target = octo_isolated / 2;  // the goal: half the OctoMap model's
   std::printf(
       "  isolated voxels that are multi-view and occupied in the OctoMap model's map: %zu of %zu; "
       "removing isolated voxels only, reaching <= %zu isolated costs at least %zu more lost "

@@ -5,13 +5,16 @@
 // against the OctoMap model's map) and the TUM depth clouds (0.05 m: occupied voxels kept).
 // --ablate also maps each regime with the robust model's parts switched off one at a time.
 //
-//   build/bin/bench_robust_model [--seeds N] [--ablate] [--data DIR]
+//   build/bin/bench_robust_model [--seeds N] [--ablate] [--match TEXT] [--data DIR]
+//   (--match: the ablation's variants whose name contains TEXT only)
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -59,7 +62,7 @@ struct Variant {
   RobustModelParams p;
 };
 
-std::vector<Variant> variants(bool ablate) {
+std::vector<Variant> all_variants(bool ablate) {
   std::vector<Variant> v;
   v.push_back({"robust", RobustModelParams{}});
   if (!ablate) return v;
@@ -132,7 +135,47 @@ std::vector<Variant> variants(bool ablate) {
   p = {};
   p.support_scale = 1.75;
   v.push_back({"sup*1.75", p});
+  // temporal consistency for patches (min_span, span_support, span_siblings) and lone_span
+  p = {};
+  p.min_span = 0;
+  p.lone_span = 0;
+  v.push_back({"-span-lone", p});  // the model without both parts
+  p = {};
+  p.min_span = 0;
+  v.push_back({"-span", p});
+  p = {};
+  p.lone_span = 0;
+  v.push_back({"-lone", p});
+  p = {};
+  p.span_siblings = 0;
+  v.push_back({"span_all", p});  // the span rule for every point, not only patches
+  p = {};
+  p.span_support = std::numeric_limits<std::uint32_t>::max();
+  v.push_back({"span_nosup", p});  // no exemption for surrounded points
+  for (std::uint32_t sib : {3u, 5u}) {
+    p = {};
+    p.span_siblings = sib;
+    v.push_back({sib == 3 ? "siblings3" : "siblings5", p});
+  }
+  for (std::uint32_t span : {4u, 7u}) {
+    p = {};
+    p.min_span = span;
+    v.push_back({span == 4 ? "span4" : "span7", p});
+  }
+  p = {};
+  p.lone_span = 10;
+  v.push_back({"lone10", p});
   return v;
+}
+
+// The default, and with --match only the variants whose name contains that text.
+std::vector<Variant> variants(bool ablate, const std::string& match) {
+  std::vector<Variant> v = all_variants(ablate);
+  if (match.empty()) return v;
+  std::vector<Variant> out{v.front()};
+  for (std::size_t i = 1; i < v.size(); ++i)
+    if (std::string(v[i].name).find(match) != std::string::npos) out.push_back(v[i]);
+  return out;
 }
 
 // One model over a sequence folder (as `knnocc map --crop`); the map and the median ms per
@@ -208,19 +251,22 @@ void real_stereo(const std::string& dir, const std::vector<Variant>& vars) {
 int main(int argc, char** argv) {
   int seeds = 5;
   bool ablate = false;
+  std::string match;
   std::string data = "../shared/data";
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--seeds") && i + 1 < argc)
       seeds = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--ablate"))
       ablate = true;
+    else if (!std::strcmp(argv[i], "--match") && i + 1 < argc)
+      match = argv[++i], ablate = true;
     else if (!std::strcmp(argv[i], "--data") && i + 1 < argc)
       data = argv[++i];
   }
   if (seeds < 1) seeds = 1;
   std::printf("bench_robust_model (%s build): tree scene seeds 1..%d, 0.1 m, 4 m crop\n",
               KNNOCC_BENCH_BUILD_TYPE, seeds);
-  const std::vector<Variant> vars = variants(ablate);
+  const std::vector<Variant> vars = variants(ablate, match);
   for (const sim::Regime& regime : sim::named_regimes()) {
     Totals octo, knn;
     std::vector<Totals> rob(vars.size());

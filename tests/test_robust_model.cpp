@@ -132,6 +132,49 @@ TEST_CASE("robust model: the rating rules") {
     CHECK(m.support_radius(2, dist) > 0.0);
     CHECK(m.support_radius(1, dist) == 0.0);
   }
+  SUBCASE("temporal consistency: a patch commits once seen min_span keyframes after its creator") {
+    const double l = logodds(knn.probability(0.05, dist));
+    c.views = 3;
+    c.support = 1;
+    c.siblings = 4;  // span_siblings (4) points of its own creator around it: a patch
+    c.span = 4;      // all views within five consecutive keyframes
+    CHECK(m.rate(c, dist).logodds == 0.0f);
+    CHECK_FALSE(m.rate(c, dist).casts_ray);
+    c.siblings = 3;  // not a patch
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(3 * l));
+    c.siblings = 4;
+    c.span = 5;  // min_span (5)
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(3 * l));
+    c.span = 2;
+    c.support = 8;  // surrounded by span_support (8) independent points: no need to wait
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(3 * l));
+    c.support = 1;
+    RobustModelParams q;
+    q.min_span = 0;  // off
+    CHECK(RobustModel(q).rate(c, dist).logodds == doctest::Approx(3 * l));
+    q = {};
+    q.span_siblings = 0;  // every point, patch or not
+    c.siblings = 0;
+    CHECK(RobustModel(q).rate(c, dist).logodds == 0.0f);
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(3 * l));
+    c.committed = true;  // once committed, the span no longer matters (support not counted)
+    c.support = std::numeric_limits<std::uint32_t>::max();
+    c.siblings = std::numeric_limits<std::uint32_t>::max();
+    CHECK(RobustModel(q).rate(c, dist).logodds == doctest::Approx(l));
+  }
+  SUBCASE("lone_span: a point seen over that many keyframes needs no independent support") {
+    const double l = logodds(knn.probability(0.05, dist));
+    c.views = 3;
+    c.support = 0;
+    c.siblings = 0;
+    c.span = 4;
+    CHECK(m.rate(c, dist).logodds == 0.0f);
+    c.span = 5;  // lone_span (5)
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(3 * l));
+    RobustModelParams q;
+    q.lone_span = 0;  // off
+    CHECK(RobustModel(q).rate(c, dist).logodds == 0.0f);
+  }
   SUBCASE("invalid parameters are refused") {
     RobustModelParams q;
     q.min_views = 0;
@@ -173,6 +216,26 @@ TEST_CASE("robust model in a Mapper: deferral, confirmation, views per map point
   CHECK(*m.map().logodds(k) == doctest::Approx(4 * logodds(0.65)).epsilon(1e-5));
 }
 
+TEST_CASE("robust model in a Mapper: the keyframe span since a point's creator") {
+  RobustModelParams params;
+  params.span_support = std::numeric_limits<std::uint32_t>::max();  // never exempt
+  params.span_siblings = 0;  // every point, not only patches (one point here)
+  Mapper<RobustModel> m(0.1, RobustModel(params));
+  const Point3d origin{0, 0, 0};
+  const std::vector<Point3d> pts{{2.05, 0.05, 0.05}}, other{{0.05, 2.05, 0.05}};
+  const std::vector<std::uint64_t> ids{42}, other_ids{7};
+  OcKey k;
+  REQUIRE(m.map().grid().point_to_key(pts[0], k));
+  for (int kf = 0; kf < 3; ++kf) m.insert_keyframe(origin, pts, ids);  // keyframes 0, 1, 2
+  m.insert_keyframe(origin, other, other_ids);                         // 3
+  m.insert_keyframe(origin, pts, ids);                                 // 4: span 4
+  CHECK(m.map_points().find(42)->views == 4);
+  CHECK_FALSE(m.map().logodds(k).has_value());  // confirmed, but only 4 keyframes after its creator
+  m.insert_keyframe(origin, pts, ids);          // 5: span 5, all five views at once (floor P_w)
+  REQUIRE(m.map().logodds(k).has_value());
+  CHECK(*m.map().logodds(k) == doctest::Approx(5 * logodds(0.65)).epsilon(1e-5));
+}
+
 TEST_CASE("robust model in a Mapper: rays of other keyframes through a point take it back") {
   RobustModelParams params;
   params.contra_min = 2;  // off by default
@@ -201,10 +264,14 @@ TEST_CASE("robust model in a Mapper: rays of other keyframes through a point tak
 TEST_CASE("robust model in a Mapper: independent support against a brute-force count") {
   // Random keyframes observing map points of a few small clusters, each cluster created by one
   // keyframe, plus scattered points; contradictions off, so a point commits (adds evidence) at
-  // the first keyframe where it is confirmed and another keyframe's point lies within 2 mu.
+  // the first keyframe where it is confirmed and another keyframe's point lies within 2 mu (or
+  // lone_span keyframes passed since its creator), unless it is a patch (span_siblings points of
+  // its creator within 2 mu) seen within min_span keyframes of its creator and not surrounded.
   RobustModelParams params;
   params.knn.k = 3;
   params.early_support = 2;  // (12 by default) so that two-view points commit here too
+  params.span_siblings = 3;  // (4 by default) a cluster's points are patches here
+  params.span_support = 5;
   params.contra_min = 0;
   Mapper<RobustModel> m(0.1, RobustModel(params));
   std::mt19937 rng(11);
@@ -213,7 +280,7 @@ TEST_CASE("robust model in a Mapper: independent support against a brute-force c
   std::vector<Point3d> pos;
   std::vector<std::size_t> creator;
   std::vector<bool> committed;
-  std::size_t commits = 0, waits = 0, early = 0;
+  std::size_t commits = 0, waits = 0, early = 0, span_waits = 0, lone = 0;
   for (std::size_t kf = 0; kf < 30; ++kf) {
     std::vector<Point3d> pts;
     std::vector<std::uint64_t> ids;
@@ -244,16 +311,23 @@ TEST_CASE("robust model in a Mapper: independent support against a brute-force c
         CHECK(now);
         continue;
       }
-      std::uint32_t support = 0;
+      std::uint32_t support = 0, siblings = 0;
       for (std::size_t o = 0; o < pos.size(); ++o) {
         const double dx = pos[o].x - pos[id].x, dy = pos[o].y - pos[id].y,
                      dz = pos[o].z - pos[id].z;
-        if (o != id && creator[o] != creator[id] && dx * dx + dy * dy + dz * dz <= r * r) ++support;
+        if (o == id || dx * dx + dy * dy + dz * dz > r * r) continue;
+        ++(creator[o] != creator[id] ? support : siblings);
       }
-      const bool supported = support >= 1;
-      const bool expect = (e->views >= params.min_views && supported) ||
-                          (e->views >= params.early_views && support >= params.early_support);
+      const std::size_t span = kf - creator[id];
+      const bool supported = support >= 1 || span >= params.lone_span;
+      const bool waits_span =
+          span < params.min_span && support < params.span_support && siblings >= 3;
+      const bool confirmed = (e->views >= params.min_views && supported) ||
+                             (e->views >= params.early_views && support >= params.early_support);
+      const bool expect = confirmed && !waits_span;
       early += e->views < params.min_views && expect;
+      span_waits += confirmed && waits_span;
+      lone += expect && support == 0;
       CHECK(now == expect);
       committed[id] = now;
       commits += now;
@@ -263,6 +337,8 @@ TEST_CASE("robust model in a Mapper: independent support against a brute-force c
   CHECK(commits > 20);
   CHECK(waits > 5);
   CHECK(early > 0);
+  CHECK(span_waits > 0);
+  CHECK(lone > 0);
 }
 
 TEST_CASE("robust model without map-point ids maps as the OctoMap model") {
@@ -290,4 +366,30 @@ TEST_CASE("robust model without map-point ids maps as the OctoMap model") {
   CHECK(differ == 0);
   CHECK(robust.map().count_voxels().occupied == octo.map().count_voxels().occupied);
   CHECK(robust.map().count_voxels().free == octo.map().count_voxels().free);
+}
+
+TEST_CASE("robust model without map-point ids keeps no map point cloud") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-3.0, 3.0);
+  std::vector<Point3d> pts;
+  for (int i = 0; i < 300; ++i) pts.push_back({u(rng), u(rng), u(rng) * 0.3});
+  const std::vector<std::uint64_t> ids(pts.size(), 7);
+  Mapper<RobustModel> robust(0.1);
+  const KeyframeStats ks = robust.insert_keyframe(Point3d{0, 0, 0}, pts);
+  CHECK(ks.rated == pts.size());
+  CHECK(ks.rays == pts.size());
+  CHECK(ks.tracker.added == 0);
+  CHECK(robust.tracker().size() == 0);  // the model rates them without it
+  CHECK(robust.map_points().size() == 0);
+  CHECK(robust.map().count_voxels().occupied > 100);
+  // a sequence either always or never gives ids, both ways round
+  CHECK_THROWS_AS(robust.insert_keyframe(Point3d{0, 0, 0}, pts, ids), std::invalid_argument);
+  Mapper<RobustModel> with_ids(0.1);
+  with_ids.insert_keyframe(Point3d{0, 0, 0}, pts, ids);
+  CHECK(with_ids.tracker().size() == 1);
+  CHECK_THROWS_AS(with_ids.insert_keyframe(Point3d{0, 0, 0}, pts), std::invalid_argument);
+  // the k-NN model keeps the cloud of keyframes without ids (its s needs it)
+  Mapper<KnnModel> knn(0.1);
+  knn.insert_keyframe(Point3d{0, 0, 0}, pts);
+  CHECK(knn.tracker().size() == pts.size());
 }

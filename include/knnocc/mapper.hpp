@@ -162,7 +162,8 @@ class Mapper {
   map_type& map() { return map_; }
   const Model& model() const { return model_; }
   const MapperOptions& options() const { return options_; }
-  /// The k-NN statistics of the map point cloud (only with a model that uses them).
+  /// The k-NN statistics of the map point cloud (only with a model that uses them; empty for
+  /// keyframes without ids when the model rates them without it, as RobustModel does).
   template <bool B = uses_map_cloud, std::enable_if_t<B, int> = 0>
   const Tracker& tracker() const {
     return tracker_;
@@ -191,6 +192,20 @@ class Mapper {
     } else {
       use_mode(Mode::keyframe_union);
       if (!load(origin, points, ids, ks)) return ks;
+      if constexpr (!detail::map_cloud_without_ids<Model>::value) {
+        if (ids.empty() && !world_.empty()) {  // rated without the map cloud: none kept
+          if (ids_given_)
+            detail::invalid_argument("KeyframeUnion: keyframes with and without ids are mixed");
+          without_ids_ = true;
+          point_ids_.assign(world_.size(), KeyframeUnion::kNoId);
+          for (std::size_t j = 0; j < world_.size(); ++j)
+            if (within_range(j)) point_ids_[j] = j;  // any id: the model does not look it up
+          rate_and_insert(ks);
+          return ks;
+        }
+        if (!ids.empty() && without_ids_)
+          detail::invalid_argument("KeyframeUnion: keyframes with and without ids are mixed");
+      }
       ids_given_ = !ids.empty();
       // Points beyond max_range stay out of the map cloud (they still cast their truncated ray).
       cloud_.clear();
@@ -374,10 +389,11 @@ class Mapper {
         c.contradictions = e.contra;
         c.committed = e.added != 0.0f;
         c.parallax = MapPointLedger<Key>::parallax(e, world_[j], origin_);
+        c.span = keyframe_ - e.first;
         if constexpr (detail::has_support<Model>::value) {
           // Counted until the point commits evidence: the support decision is taken once.
           const double r = c.committed ? 0.0 : model_.support_radius(c.views, dist);
-          if (r > 0) c.support = count_support(id, e.first, r);
+          if (r > 0) c.support = count_support(id, e.first, r, c.siblings);
         }
       }
       ratings_[j] = model_.rate(c, dist);
@@ -388,8 +404,11 @@ class Mapper {
   }
 
   // Map points within r of map point `id` (the tracker's cloud) that a keyframe other than
-  // `first` created (PointContext::support).
-  std::uint32_t count_support(std::uint64_t id, std::size_t first, double r) {
+  // `first` created (PointContext::support);
+  // `siblings`: the other map points within r that `first` created (PointContext::siblings).
+  std::uint32_t count_support(std::uint64_t id, std::size_t first, double r,
+                              std::uint32_t& siblings) {
+    siblings = 0;
     if (!tracker_.contains(id)) return 0;
     tracker_.radius(tracker_.position(id), r * r, near_);
     std::uint32_t n = 0;
@@ -397,7 +416,9 @@ class Mapper {
       const std::uint64_t other = tracker_.id_at(i);
       if (other == id) continue;
       const auto* e = ledger_.find(other);
-      n += e == nullptr || e->first != first;
+      const bool independent = e == nullptr || e->first != first;
+      n += independent;
+      siblings += !independent;
     }
     return n;
   }
@@ -433,6 +454,7 @@ class Mapper {
   std::vector<EndpointRating> ratings_;
   // Contextual model only (rate_in_context).
   bool ids_given_ = false;
+  bool without_ids_ = false;  // keyframes without ids kept out of the map cloud (model's choice)
   std::size_t keyframe_ = 0;
   MapPointLedger<Key> ledger_;
   std::vector<Point3d> kept_world_;

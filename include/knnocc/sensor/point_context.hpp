@@ -17,6 +17,8 @@ struct PointContext {
   std::uint32_t in_voxel = 1;  ///< this keyframe's rated endpoints in the endpoint's voxel
   double range = 0.0;          ///< distance from the sensor (m)
   double parallax = 0.0;       ///< angle (rad) between this viewing ray and the first one's
+  /// Keyframes from the map point's creator (its first observer) to this one (0: created here).
+  std::size_t span = 0;
   /// The voxel's log-odds before this keyframe (NaN: unknown): free evidence other keyframes'
   /// rays left there.
   float voxel_logodds = std::numeric_limits<float>::quiet_NaN();
@@ -29,6 +31,9 @@ struct PointContext {
   /// (sensor_model.hpp: support_radius) that a keyframe other than this point's creator (its
   /// first observer) created; the largest value when not counted (e.g. once committed).
   std::uint32_t support = std::numeric_limits<std::uint32_t>::max();
+  /// The other map points within the same radius that its own creator created (counted with
+  /// support; the largest value when not counted).
+  std::uint32_t siblings = std::numeric_limits<std::uint32_t>::max();
 };
 
 }  // namespace knnocc

@@ -42,6 +42,15 @@ template <class M>
 struct uses_map_cloud<M, std::void_t<decltype(M::uses_map_cloud)>>
     : std::bool_constant<M::uses_map_cloud> {};
 
+// Optional for a contextual model: `static constexpr bool map_cloud_without_ids = false` when it
+// rates keyframes without map-point ids from nothing the map point cloud gives (RobustModel);
+// Mapper then keeps no map point cloud for such keyframes.
+template <class M, class = void>
+struct map_cloud_without_ids : std::true_type {};
+template <class M>
+struct map_cloud_without_ids<M, std::void_t<decltype(M::map_cloud_without_ids)>>
+    : std::bool_constant<M::map_cloud_without_ids> {};
+
 template <class M, class = void>
 struct has_miss_logodds : std::false_type {};
 template <class M>

@@ -264,15 +264,18 @@ TEST_CASE("robust model in a Mapper: rays of other keyframes through a point tak
 TEST_CASE("robust model in a Mapper: independent support against a brute-force count") {
   // Random keyframes observing map points of a few small clusters, each cluster created by one
   // keyframe, plus scattered points; contradictions off, so a point commits (adds evidence) at
-  // the first keyframe where it is confirmed and another keyframe's point lies within 2 mu (or
-  // lone_span keyframes passed since its creator), unless it is a patch (span_siblings points of
-  // its creator within 2 mu) seen within min_span keyframes of its creator and not surrounded.
+  // the first keyframe where it is confirmed and another keyframe's point lies within 2 mu (or,
+  // when it is not a patch, lone_span keyframes passed since its creator), unless it is a patch
+  // (span_siblings points of its creator within 2 mu) seen within min_span keyframes of its
+  // creator and not surrounded.
   RobustModelParams params;
   params.knn.k = 3;
   params.early_support = 2;  // (12 by default) so that two-view points commit here too
   params.span_siblings = 3;  // (4 by default) a cluster's points are patches here
   params.span_support = 5;
   params.contra_min = 0;
+  SUBCASE("lone rule for points that are not patches (the default)") {}
+  SUBCASE("lone rule for patches too") { params.lone_patches = true; }
   Mapper<RobustModel> m(0.1, RobustModel(params));
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-2.0, 2.0), g(-0.04, 0.04);
@@ -319,9 +322,10 @@ TEST_CASE("robust model in a Mapper: independent support against a brute-force c
         ++(creator[o] != creator[id] ? support : siblings);
       }
       const std::size_t span = kf - creator[id];
-      const bool supported = support >= 1 || span >= params.lone_span;
-      const bool waits_span =
-          span < params.min_span && support < params.span_support && siblings >= 3;
+      const bool patch = siblings >= params.span_siblings;
+      const bool supported =
+          support >= 1 || (span >= params.lone_span && (params.lone_patches || !patch));
+      const bool waits_span = span < params.min_span && support < params.span_support && patch;
       const bool confirmed = (e->views >= params.min_views && supported) ||
                              (e->views >= params.early_views && support >= params.early_support);
       const bool expect = confirmed && !waits_span;

@@ -98,10 +98,10 @@ map point has been observed by --min-views keyframes (default 3) and another key
 lies within twice the mean k-NN distance, or by two keyframes and 12 such points lie there (the
 keyframe that commits it also adds the deferred evidence); a patch (4 points of its own keyframe
 near it) waits for a keyframe 5 keyframes later unless 8 independent points surround it, a point
-seen over 5 keyframes needs no support; it casts its free ray from the fourth view on; eq 13
-floored at P_w (a confirmed point is never pushed towards free), one keyframe adds the mean of its
-endpoints in a voxel; without map-point ids it is OctoMap's model and keeps no map point cloud
-(the knn line then says map_points 0).
+that is not a patch, seen over 5 keyframes, needs no support; it casts its free ray from the
+fourth view on; eq 13 floored at P_w (a confirmed point is never pushed towards free), one
+keyframe adds the mean of its endpoints in a voxel; without map-point ids it is OctoMap's model
+and keeps no map point cloud (the knn line then says map_points 0).
 Takes the k-NN flags above. Prints the same knn line.
   --min-views N         keyframes that confirm a map point (default 3, in [1, 1000])
 exit status: 0 success, 2 bad input (one line on stderr naming the file and the problem).

@@ -32,8 +32,11 @@
 //      gathered in z, y, x brick order whatever the path or thread count; the missing map bricks
 //      created in that order (one thread), then every touched voxel updated exactly once,
 //      occupied first (each brick by one thread); a rated scan's endpoint voxels then get their
-//      sums (eq 15, detail/rated_sums.hpp).
-// The scratch is kept between scans, so a warmed-up inserter allocates nothing per scan.
+//      sums (eq 15, detail/rated_sums.hpp). One thread with no map memory limit takes the dense
+//      scratch brick row by brick row and updates each touched brick as it is found, in the same
+//      order, without a record per brick (apply_dense_serial): the same map, less memory.
+// The scratch is kept between scans, so a warmed-up inserter allocates nothing per scan;
+// scratch_usage() tells what it holds, part by part.
 //
 // ScanInserter is the scan integrator of Mapper (mapper.hpp): `insert_point_cloud` applies a scan
 // with the model's fixed hit and miss log-odds, `insert_rated` a scan whose endpoints the sensor
@@ -114,6 +117,25 @@ class ScanInserter {
   /// reports MemoryLimitError before allocating, and the dense scratch takes at most half of
   /// the room the map leaves (scratch_limit() still bounds it).
   std::size_t memory_usage() const { return apply_scratch_bytes(); }
+
+  /// All the scratch kept between scans, by part (what the benches print).
+  ScratchUsage scratch_usage() const {
+    ScratchUsage u;
+    for (unsigned t = 0; t < scratch_.size(); ++t) {
+      const detail::ThreadScratch& s = *scratch_[t];
+      u.hit_bitmaps += s.hit.capacity_bytes();
+      u.miss_bitmaps += s.miss.capacity_bytes();
+      u.point_buffers += s.part.rays.capacity_bytes() + s.part.hits.capacity_bytes() +
+                         s.part.hit_logodds.capacity() * sizeof(float);
+      u.ray_blocks += sizeof(*s.block);
+      u.hashed += s.hashed.memory_usage();
+      u.other += (s.row_hit.capacity() + s.row_miss.capacity()) * sizeof(VoxelMask);
+    }
+    u.brick_groups = bricks_.memory_usage() + order_.capacity() * sizeof(std::uint32_t);
+    u.other += first_chunk_.capacity() * sizeof(std::size_t) +
+               endpoints_.capacity() * sizeof(std::uint64_t) + sums_.capacity() * sizeof(sums_[0]);
+    return u;
+  }
 
   /// Inserts one scan of world-frame points seen from `origin`. max_range < 0: no limit;
   /// max_range == 0 or NaN is rejected (std::invalid_argument; abort without exceptions).
@@ -260,18 +282,18 @@ class ScanInserter {
       };
       team_.run(job);
       add_visits(st);
-      detail::gather_dense<Key>(team_, scratch_, bricks_);
-    } else {
-      // The threads' hashed scratch shares the room the map leaves under its limit.
-      const std::size_t elsewhere =
-          in_map + bricks_.memory_usage() + order_.capacity() * sizeof(std::uint32_t);
-      if (limit && elsewhere >= limit) detail::memory_limit_exceeded(limit, elsewhere);
-      for (unsigned t = 0; t < threads(); ++t)
-        scratch(t).hashed.set_cap(limit ? (limit - elsewhere) / threads() : 0, limit, elsewhere);
-      walk_hashed(o, rays);
-      add_visits(st);
-      detail::gather_hashed<Key>(scratch_, threads(), order_, bricks_, limit, in_map);
+      apply_dense(values, st);
+      return;
     }
+    // The threads' hashed scratch shares the room the map leaves under its limit.
+    const std::size_t elsewhere =
+        in_map + bricks_.memory_usage() + order_.capacity() * sizeof(std::uint32_t);
+    if (limit && elsewhere >= limit) detail::memory_limit_exceeded(limit, elsewhere);
+    for (unsigned t = 0; t < threads(); ++t)
+      scratch(t).hashed.set_cap(limit ? (limit - elsewhere) / threads() : 0, limit, elsewhere);
+    walk_hashed(o, rays);
+    add_visits(st);
+    detail::gather_hashed<Key>(scratch_, threads(), order_, bricks_, limit, in_map);
     apply(values, st);
   }
 
@@ -369,7 +391,19 @@ class ScanInserter {
 
   void apply(const detail::ScanValues& values, ScanStats& st) {
     const ScratchCounted counted(*map_, apply_scratch_bytes());
-    const detail::UpdateCounts c = detail::apply_updates(*map_, bricks_, values, team_, scratch_);
+    add_updates(detail::apply_updates(*map_, bricks_, values, team_, scratch_), values, st);
+  }
+  // The dense scratch into the map: with one thread and no memory limit brick row by brick row,
+  // without the touched bricks' records (the limit refuses a scan's bricks before any is made).
+  void apply_dense(const detail::ScanValues& values, ScanStats& st) {
+    if (threads() == 1 && !map_->memory_limit()) {
+      add_updates(detail::apply_dense_serial(*map_, scratch(0), values), values, st);
+      return;
+    }
+    detail::gather_dense<Key>(team_, scratch_, bricks_);
+    apply(values, st);
+  }
+  void add_updates(const detail::UpdateCounts& c, const detail::ScanValues& values, ScanStats& st) {
     st.occupied_voxels += c.occupied;
     st.free_voxels += c.free;
     if (values.rated)
@@ -427,8 +461,7 @@ class ScanInserter {
     for (unsigned t = 0; t < threads(); ++t) add_counts(scratch(t).part.counts, st);
     add_visits(st);
     st.chunks = chunks.size();
-    detail::gather_dense<Key>(team_, scratch_, bricks_);
-    apply(values, st);
+    apply_dense(values, st);
     return true;
   }
 

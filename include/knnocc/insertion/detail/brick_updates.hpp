@@ -4,6 +4,8 @@
 // whatever the path or the thread count; the missing map bricks are created in that order by one
 // thread (the map's storage order never depends on the path or the thread count); then every
 // touched voxel gets exactly one update, occupied first (occupied wins), each brick by one thread.
+// With one thread and no map memory limit, apply_dense_serial does both steps brick row by brick
+// row from the dense scratch, keeping no record per touched brick.
 
 #include <algorithm>
 #include <array>
@@ -112,6 +114,74 @@ void gather_dense(Team& team, ThreadScratches& scratch, BrickGroups& out) {
     scratch[t]->hit.mark_clean();
     scratch[t]->miss.mark_clean();
   }
+}
+
+/// One thread, no memory limit on the map: what gather_dense and apply_updates do, in the same
+/// order, without a record per touched brick (144 bytes each, megabytes for a large scan): each
+/// brick row of the thread's dense bitmaps is taken (and cleared), its touched bricks created and
+/// updated at once, in z, y, x order. A fresh map first gets room for every touched brick (counted
+/// in a pass that leaves the bitmaps as they are), as apply_updates gives it. The same map, pool
+/// order and counts as the two-step path.
+template <class Key>
+UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s,
+                                const ScanValues& values) {
+  using layout = BrickLayout<Key>;
+  ScanBitmap& hit = s.hit;
+  ScanBitmap& miss = s.miss;
+  const std::int64_t nbx = hit.bricks(0), nby = hit.bricks(1), nbz = hit.bricks(2);
+  const std::int64_t* lo = hit.lo();
+  s.row_hit.resize(static_cast<std::size_t>(nbx));
+  s.row_miss.resize(static_cast<std::size_t>(nbx));
+  VoxelMask* row_hit = s.row_hit.data();
+  VoxelMask* row_miss = s.row_miss.data();
+  if (map.num_bricks() == 0) {  // a fresh map: all are new
+    std::size_t touched = 0;
+    for (std::int64_t bz = 0; bz < nbz; ++bz)
+      for (std::int64_t by = 0; by < nby; ++by) {
+        hit.take_brick_row<false>(by, bz, row_hit);
+        miss.take_brick_row<false>(by, bz, row_miss);
+        for (std::int64_t bx = 0; bx < nbx; ++bx) {
+          touched += row_hit[bx].any() || row_miss[bx].any();
+          row_hit[bx].clear();
+          row_miss[bx].clear();
+        }
+      }
+    map.reserve_bricks(touched);
+  }
+  const bool hits_here = !values.rated;  // rated hits carry their own sums
+  const bool records = map.change_detection_enabled();
+  UpdateCounts c;
+  for (std::int64_t bz = 0; bz < nbz; ++bz)
+    for (std::int64_t by = 0; by < nby; ++by) {
+      hit.take_brick_row(by, bz, row_hit);
+      miss.take_brick_row(by, bz, row_miss);
+      for (std::int64_t bx = 0; bx < nbx; ++bx) {
+        VoxelMask& h = row_hit[bx];
+        VoxelMask& m = row_miss[bx];
+        if (!h.any() && !m.any()) continue;
+        const std::uint32_t slot = map.brick_slot(layout::pack_brick(
+            (lo[0] >> kBrickBits) + bx, (lo[1] >> kBrickBits) + by, (lo[2] >> kBrickBits) + bz));
+        for (std::size_t i = 0; i < m.w.size(); ++i) m.w[i] &= ~h.w[i];  // hit wins
+        auto& brick = map.brick_at(slot);
+        const int masks = int(hits_here && h.any()) + int(m.any());
+        if (masks > 1 || brick.known.any() || records) map.prepare_values(brick);
+        if (records) {
+          if (hits_here) map.update_masked(brick, h, values.hit);
+          map.update_masked(brick, m, values.miss);
+        } else {
+          if (hits_here) c.added += map.update_brick(brick, h, values.hit);
+          c.added += map.update_brick(brick, m, values.miss);
+        }
+        if (hits_here) c.occupied += static_cast<std::size_t>(h.count());
+        c.free += static_cast<std::size_t>(m.count());
+        h.clear();
+        m.clear();
+      }
+    }
+  hit.mark_clean();
+  miss.mark_clean();
+  if (!records) map.add_known(c.added);
+  return c;
 }
 
 /// Gathers the hashed scratch into `out` (groups of 256 bricks in z, y, x order), leaving every

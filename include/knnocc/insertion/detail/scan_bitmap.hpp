@@ -66,12 +66,16 @@ class ScanBitmap {
   /// Bytes: voxel i is byte i, 0 or 1.
   std::uint8_t* bytes() { return reinterpret_cast<std::uint8_t*>(bits_.get()); }
   bool has_bytes() const { return bytes_; }
+  /// Bytes of address space held (pages no mark touched are not resident).
+  std::size_t capacity_bytes() const { return capacity_ * sizeof(std::uint64_t); }
 
   const std::int64_t* lo() const { return lo_; }
   /// Number of bricks along axis a.
   std::int64_t bricks(int a) const { return n_[a] / kBrickEdge; }
 
-  /// ORs the bits of the bricks (0..bricks(0)-1, by, bz) into masks[0..bricks(0)) and clears them.
+  /// ORs the bits of the bricks (0..bricks(0)-1, by, bz) into masks[0..bricks(0)) and clears them
+  /// (leaves them when Clear is false).
+  template <bool Clear = true>
   void take_brick_row(std::int64_t by, std::int64_t bz, VoxelMask* masks) {
     const std::int64_t row_words = n_[0] / (bytes_ ? 8 : 64);
     for (int lz = 0; lz < kBrickEdge; ++lz) {
@@ -89,7 +93,7 @@ class ScanBitmap {
           for (std::int64_t bx = 0; bx < row_words; ++bx) {
             const std::uint64_t w = row[bx];  // one brick's row, a byte (0 or 1) per voxel
             if (!w) continue;
-            row[bx] = 0;
+            if (Clear) row[bx] = 0;
             masks[bx].w[lz_word] |= row_bits(w) << (8 * ly);
           }
           continue;
@@ -97,7 +101,7 @@ class ScanBitmap {
         for (std::int64_t wx = 0; wx < row_words; ++wx) {
           const std::uint64_t w = row[wx];  // eight bricks along x, 8 bits each
           if (!w) continue;
-          row[wx] = 0;
+          if (Clear) row[wx] = 0;
           for (int b = 0; b < 8; ++b) {
             const std::uint64_t byte = (w >> (8 * b)) & 0xff;
             masks[wx * 8 + b].w[lz_word] |= byte << (8 * ly);

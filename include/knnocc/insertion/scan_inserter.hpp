@@ -27,7 +27,8 @@
 //      Large scans whose dense box is known in advance run 1 and 2 a chunk of points at a time
 //      (insert_chunked): each thread takes chunks in turn, collects them (the hits straight into
 //      its hit bitmap) and walks their rays into its own scratch, all in one run of the threads;
-//      this bounds the per-point buffers.
+//      this bounds the per-point buffers. With one thread, a scan with few points for its box
+//      keeps its hits as 4-byte codes instead of a hit bitmap (detail/hit_codes.hpp).
 //   3. apply (detail/brick_updates.hpp): the touched bricks with the thread scratches OR-ed,
 //      gathered in z, y, x brick order whatever the path or thread count; the missing map bricks
 //      created in that order (one thread), then every touched voxel updated exactly once,
@@ -126,10 +127,12 @@ class ScanInserter {
       u.hit_bitmaps += s.hit.capacity_bytes();
       u.miss_bitmaps += s.miss.capacity_bytes();
       u.point_buffers += s.part.rays.capacity_bytes() + s.part.hits.capacity_bytes() +
-                         s.part.hit_logodds.capacity() * sizeof(float);
+                         s.part.hit_logodds.capacity() * sizeof(float) +
+                         s.hit_list.capacity_bytes();
       u.ray_blocks += sizeof(*s.block);
       u.hashed += s.hashed.memory_usage();
-      u.other += (s.row_hit.capacity() + s.row_miss.capacity()) * sizeof(VoxelMask);
+      u.other += (s.row_hit.capacity() + s.row_miss.capacity()) * sizeof(VoxelMask) +
+                 s.hit_codes.memory_usage() + s.row_any.capacity() * sizeof(std::uint64_t);
     }
     u.brick_groups = bricks_.memory_usage() + order_.capacity() * sizeof(std::uint32_t);
     u.other += first_chunk_.capacity() * sizeof(std::size_t) +
@@ -326,10 +329,10 @@ class ScanInserter {
     for (unsigned t = 0; t < threads(); ++t) st.ray_keys += scratch(t).visits;
   }
 
-  // The dense path's bitmaps of the box, all zero.
-  void prepare_dense(const detail::DenseBox& box) {
+  // The dense path's bitmaps of the box, all zero (the hit bitmaps only if `hit_bitmaps`).
+  void prepare_dense(const detail::DenseBox& box, bool hit_bitmaps = true) {
     for (unsigned t = 0; t < threads(); ++t) {
-      scratch(t).hit.reshape(box.lo, box.size);
+      if (hit_bitmaps) scratch(t).hit.reshape(box.lo, box.size);
       scratch(t).miss.reshape(box.lo, box.size, box.byte_marks);
     }
   }
@@ -395,9 +398,10 @@ class ScanInserter {
   }
   // The dense scratch into the map: with one thread and no memory limit brick row by brick row,
   // without the touched bricks' records (the limit refuses a scan's bricks before any is made).
-  void apply_dense(const detail::ScanValues& values, ScanStats& st) {
+  // codes: the hits are in scratch(0).hit_list (one thread, no limit only).
+  void apply_dense(const detail::ScanValues& values, ScanStats& st, bool codes = false) {
     if (threads() == 1 && !map_->memory_limit()) {
-      add_updates(detail::apply_dense_serial(*map_, scratch(0), values), values, st);
+      add_updates(detail::apply_dense_serial(*map_, scratch(0), values, codes), values, st);
       return;
     }
     detail::gather_dense<Key>(team_, scratch_, bricks_);
@@ -432,7 +436,13 @@ class ScanInserter {
 
     st.byte_marks = box->byte_marks;
     start_parts(o);
-    prepare_dense(*box);
+    // One thread, no memory limit: a scan with few points for its box keeps its hits as codes (4
+    // bytes a hit, detail/hit_codes.hpp) rather than in a hit bitmap (a bit per voxel of the box).
+    const auto voxels = static_cast<std::size_t>(box->size[0] * box->size[1] * box->size[2]);
+    const bool codes = threads() == 1 && !map_->memory_limit() && n * 64 <= voxels &&
+                       scratch(0).hit_codes.shape(box->lo, box->size);
+    if (codes) scratch(0).hit_list.clear();
+    prepare_dense(*box, !codes);
     const detail::RayFan fan = dense_fan(o, *box);
     for (unsigned t = 0; t < threads(); ++t)  // here: a thread may get no chunk of this scan
       scratch(t).part.rays.reserve(chunk_points);
@@ -446,6 +456,10 @@ class ScanInserter {
         part.rays.clear();
         detail::Collector<Key> collect_chunk = collector(t, o, max_range);
         collect_chunk.hit_map = &mine.hit;
+        if (codes) {
+          collect_chunk.hit_codes = &mine.hit_codes;
+          collect_chunk.hit_list = &mine.hit_list;
+        }
         collect_chunk.add_chunk(first + static_cast<std::ptrdiff_t>(a),
                                 first + static_cast<std::ptrdiff_t>(b));
         bool given = false;  // the chunk's rays, handed out once
@@ -461,7 +475,7 @@ class ScanInserter {
     for (unsigned t = 0; t < threads(); ++t) add_counts(scratch(t).part.counts, st);
     add_visits(st);
     st.chunks = chunks.size();
-    apply_dense(values, st);
+    apply_dense(values, st, codes);
     return true;
   }
 

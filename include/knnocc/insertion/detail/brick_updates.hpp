@@ -16,6 +16,7 @@
 #include "../../map/brick.hpp"
 #include "../../map/occupancy_map.hpp"
 #include "hashed_marks.hpp"
+#include "hit_codes.hpp"
 #include "scan_bitmap.hpp"
 #include "thread_scratch.hpp"
 #include "work_queue.hpp"
@@ -119,32 +120,62 @@ void gather_dense(Team& team, ThreadScratches& scratch, BrickGroups& out) {
 /// One thread, no memory limit on the map: what gather_dense and apply_updates do, in the same
 /// order, without a record per touched brick (144 bytes each, megabytes for a large scan): each
 /// brick row of the thread's dense bitmaps is taken (and cleared), its touched bricks created and
-/// updated at once, in z, y, x order. A fresh map first gets room for every touched brick (counted
-/// in a pass that leaves the bitmaps as they are), as apply_updates gives it. The same map, pool
+/// updated at once, in z, y, x order. With `codes` the hits come from s.hit_list (HitCodes, sorted
+/// here) instead of the hit bitmap. A fresh map first gets room for every touched brick (counted
+/// in a pass that leaves the scratch as it is), as apply_updates gives it. The same map, pool
 /// order and counts as the two-step path.
 template <class Key>
-UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s,
-                                const ScanValues& values) {
+UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const ScanValues& values,
+                                bool codes = false) {
   using layout = BrickLayout<Key>;
   ScanBitmap& hit = s.hit;
-  ScanBitmap& miss = s.miss;
-  const std::int64_t nbx = hit.bricks(0), nby = hit.bricks(1), nbz = hit.bricks(2);
-  const std::int64_t* lo = hit.lo();
+  ScanBitmap& miss = s.miss;  // the box's shape (the hit bitmap has it too unless `codes`)
+  const std::int64_t nbx = miss.bricks(0), nby = miss.bricks(1), nbz = miss.bricks(2);
+  const std::int64_t* lo = miss.lo();
   s.row_hit.resize(static_cast<std::size_t>(nbx));
   s.row_miss.resize(static_cast<std::size_t>(nbx));
   VoxelMask* row_hit = s.row_hit.data();
   VoxelMask* row_miss = s.row_miss.data();
+  if (codes) s.hit_codes.by_row(s.hit_list.data(), s.hit_list.size());
+  // Row (by, bz)'s hits into row_hit (from the hit bitmap, clearing it, or from the codes).
+  auto take_hits = [&](std::int64_t by, std::int64_t bz) {
+    if (!codes) {
+      hit.take_brick_row(by, bz, row_hit);
+      return;
+    }
+    const auto r = static_cast<std::size_t>(bz * nby + by);
+    const std::uint32_t* list = s.hit_list.data();
+    for (std::size_t j = s.hit_codes.row_start(r), e = s.hit_codes.row_start(r + 1); j < e; ++j)
+      row_hit[s.hit_codes.brick_of(list[j])].set(HitCodes::local_of(list[j]));
+  };
   if (map.num_bricks() == 0) {  // a fresh map: all are new
+    // Per brick row, which bricks the rows of each bitmap touch (the codes' bricks added to the
+    // miss bitmap's), then how many.
+    const bool alike = codes || hit.row_words() == miss.row_words();  // both bits
+    const std::int64_t hit_words = alike ? 0 : hit.row_words(), miss_words = miss.row_words();
+    s.row_any.resize(static_cast<std::size_t>(hit_words + miss_words));
+    std::uint64_t* any_miss = s.row_any.data();
+    std::uint64_t* any_hit = alike ? any_miss : any_miss + miss_words;
     std::size_t touched = 0;
     for (std::int64_t bz = 0; bz < nbz; ++bz)
       for (std::int64_t by = 0; by < nby; ++by) {
-        hit.take_brick_row<false>(by, bz, row_hit);
-        miss.take_brick_row<false>(by, bz, row_miss);
-        for (std::int64_t bx = 0; bx < nbx; ++bx) {
-          touched += row_hit[bx].any() || row_miss[bx].any();
-          row_hit[bx].clear();
-          row_miss[bx].clear();
+        std::fill(s.row_any.begin(), s.row_any.end(), std::uint64_t{0});
+        miss.or_brick_row(by, bz, any_miss);
+        if (codes) {
+          const auto r = static_cast<std::size_t>(bz * nby + by);
+          for (std::size_t j = s.hit_codes.row_start(r), e = s.hit_codes.row_start(r + 1); j < e;
+               ++j)
+            miss.add_brick(any_miss,
+                           static_cast<std::int64_t>(s.hit_codes.brick_of(s.hit_list[j])));
+        } else {
+          hit.or_brick_row(by, bz, any_hit);
         }
+        if (alike) {
+          touched += miss.bricks_in(any_miss);
+          continue;
+        }
+        for (std::int64_t bx = 0; bx < nbx; ++bx)
+          touched += hit.brick_in(any_hit, bx) || miss.brick_in(any_miss, bx);
       }
     map.reserve_bricks(touched);
   }
@@ -153,7 +184,7 @@ UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s,
   UpdateCounts c;
   for (std::int64_t bz = 0; bz < nbz; ++bz)
     for (std::int64_t by = 0; by < nby; ++by) {
-      hit.take_brick_row(by, bz, row_hit);
+      take_hits(by, bz);
       miss.take_brick_row(by, bz, row_miss);
       for (std::int64_t bx = 0; bx < nbx; ++bx) {
         VoxelMask& h = row_hit[bx];
@@ -178,7 +209,7 @@ UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s,
         m.clear();
       }
     }
-  hit.mark_clean();
+  if (!codes) hit.mark_clean();
   miss.mark_clean();
   if (!records) map.add_known(c.added);
   return c;

@@ -73,9 +73,7 @@ class ScanBitmap {
   /// Number of bricks along axis a.
   std::int64_t bricks(int a) const { return n_[a] / kBrickEdge; }
 
-  /// ORs the bits of the bricks (0..bricks(0)-1, by, bz) into masks[0..bricks(0)) and clears them
-  /// (leaves them when Clear is false).
-  template <bool Clear = true>
+  /// ORs the bits of the bricks (0..bricks(0)-1, by, bz) into masks[0..bricks(0)) and clears them.
   void take_brick_row(std::int64_t by, std::int64_t bz, VoxelMask* masks) {
     const std::int64_t row_words = n_[0] / (bytes_ ? 8 : 64);
     for (int lz = 0; lz < kBrickEdge; ++lz) {
@@ -93,7 +91,7 @@ class ScanBitmap {
           for (std::int64_t bx = 0; bx < row_words; ++bx) {
             const std::uint64_t w = row[bx];  // one brick's row, a byte (0 or 1) per voxel
             if (!w) continue;
-            if (Clear) row[bx] = 0;
+            row[bx] = 0;
             masks[bx].w[lz_word] |= row_bits(w) << (8 * ly);
           }
           continue;
@@ -101,7 +99,7 @@ class ScanBitmap {
         for (std::int64_t wx = 0; wx < row_words; ++wx) {
           const std::uint64_t w = row[wx];  // eight bricks along x, 8 bits each
           if (!w) continue;
-          if (Clear) row[wx] = 0;
+          row[wx] = 0;
           for (int b = 0; b < 8; ++b) {
             const std::uint64_t byte = (w >> (8 * b)) & 0xff;
             masks[wx * 8 + b].w[lz_word] |= byte << (8 * ly);
@@ -109,6 +107,46 @@ class ScanBitmap {
         }
       }
     }
+  }
+
+  /// Words per row of voxels along x.
+  std::int64_t row_words() const { return n_[0] / (bytes_ ? 8 : 64); }
+  /// ORs the 64 rows of the brick row (by, bz) into acc[0..row_words()), leaving the bits: then
+  /// brick bx has a bit set iff brick_in(acc, bx).
+  void or_brick_row(std::int64_t by, std::int64_t bz, std::uint64_t* acc) const {
+    const std::int64_t words = row_words();
+    for (int lz = 0; lz < kBrickEdge; ++lz) {
+      const std::uint64_t* row =
+          bits_.get() + ((bz * kBrickEdge + lz) * n_[1] + by * kBrickEdge) * words;
+      for (int ly = 0; ly < kBrickEdge; ++ly, row += words)
+        for (std::int64_t w = 0; w < words; ++w) acc[w] |= row[w];
+    }
+  }
+  bool brick_in(const std::uint64_t* acc, std::int64_t bx) const {
+    return bytes_ ? acc[bx] != 0 : ((acc[bx >> 3] >> (8 * (bx & 7))) & 0xff) != 0;
+  }
+  /// Makes brick_in(acc, bx) true.
+  void add_brick(std::uint64_t* acc, std::int64_t bx) const {
+    if (bytes_)
+      acc[bx] |= 1;
+    else
+      acc[bx >> 3] |= std::uint64_t{1} << (8 * (bx & 7));
+  }
+  /// The bricks bx with brick_in(acc, bx).
+  std::size_t bricks_in(const std::uint64_t* acc) const {
+    std::size_t n = 0;
+    for (std::int64_t i = 0; i < row_words(); ++i) {
+      std::uint64_t w = acc[i];
+      if (bytes_) {
+        n += w != 0;
+        continue;
+      }
+      w |= w >> 4;  // bit 8 b of w: whether byte b has a bit set
+      w |= w >> 2;
+      w |= w >> 1;
+      n += static_cast<std::size_t>(popcount64(w & 0x0101010101010101ull));
+    }
+    return n;
   }
 
   /// The 8 bytes of w, each 0 or 1, as 8 bits (byte k to bit k). Byte k times 2^(7 (8 - k)) lands

@@ -441,7 +441,10 @@ class ScanInserter {
     const auto voxels = static_cast<std::size_t>(box->size[0] * box->size[1] * box->size[2]);
     const bool codes = threads() == 1 && !map_->memory_limit() && n * 64 <= voxels &&
                        scratch(0).hit_codes.shape(box->lo, box->size);
-    if (codes) scratch(0).hit_list.clear();
+    if (codes) {  // room for every point's hit at once: no copies as the chunks come in
+      scratch(0).hit_list.clear();
+      scratch(0).hit_list.reserve(n);
+    }
     prepare_dense(*box, !codes);
     const detail::RayFan fan = dense_fan(o, *box);
     for (unsigned t = 0; t < threads(); ++t)  // here: a thread may get no chunk of this scan

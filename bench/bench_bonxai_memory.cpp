@@ -42,6 +42,10 @@ struct Workload {
 struct Measure {
   double added_mb = 0, seconds = 0, structure_mb = 0;
   std::size_t known = 0;
+  // knnocc only: the inserter's scratch by part (ScanInserter::scratch_usage), the resident memory
+  // at the end with and without the inserter (the map alone), all relative to the start.
+  knnocc::ScratchUsage scratch;
+  double end_mb = 0, map_mb = 0;
 };
 
 // Runs f() (which fills known, seconds and structure_mb) in a forked child; adds the peak RSS the
@@ -54,15 +58,35 @@ Measure in_child(F f) {
 }
 
 Measure run_knnocc(const Workload& w) {
+  const double start_mb = knnocc::bench::resident_mb();
   knnocc::OccupancyMap<knnocc::OcKey> map(w.res);
-  knnocc::ScanInserter<knnocc::OcKey> inserter(map);
-  const double t0 = knnocc::bench::now();
-  for (const Scan& s : *w.scans) inserter.insert_point_cloud(s.origin, s.points, w.max_range);
   Measure m;
-  m.seconds = knnocc::bench::now() - t0;
+  {
+    knnocc::ScanInserter<knnocc::OcKey> inserter(map);
+    const double t0 = knnocc::bench::now();
+    for (const Scan& s : *w.scans) inserter.insert_point_cloud(s.origin, s.points, w.max_range);
+    m.seconds = knnocc::bench::now() - t0;
+    m.scratch = inserter.scratch_usage();
+    m.end_mb = knnocc::bench::resident_mb() - start_mb;
+  }
+  malloc_trim(0);
+  m.map_mb = knnocc::bench::resident_mb() - start_mb;
   m.known = map.num_voxels();
   m.structure_mb = static_cast<double>(map.memory_usage()) / 1e6;
   return m;
+}
+
+// Where knnocc's peak went: the map, and the inserter's scratch kept between scans, by part.
+void print_parts(const Measure& m) {
+  const knnocc::ScratchUsage& u = m.scratch;
+  auto mb = [](std::size_t b) { return static_cast<double>(b) / 1048576.0; };
+  std::printf(
+      "%-26s   resident at end %.1f MB: map %.1f, inserter %.1f; inserter scratch held %.1f MB: "
+      "hit bitmaps %.2f, miss bitmaps %.2f, point buffers %.2f, ray blocks %.2f, hashed %.2f, "
+      "brick groups %.2f, other %.2f\n",
+      "", m.end_mb, m.map_mb, m.end_mb - m.map_mb, mb(u.total()), mb(u.hit_bitmaps),
+      mb(u.miss_bitmaps), mb(u.point_buffers), mb(u.ray_blocks), mb(u.hashed), mb(u.brick_groups),
+      mb(u.other));
 }
 
 Measure run_bonxai(const Workload& w) {
@@ -121,6 +145,7 @@ int main(int argc, char** argv) {
     const double bx_b = bx.added_mb * 1048576.0 / static_cast<double>(bx.known);
     std::printf("%-26s %-7s %12zu %10.1f %9.3f %12.1f %12.1f\n", w.name.c_str(), "knnocc",
                 ours.known, ours.added_mb, ours.seconds, ours_b, ours.structure_mb);
+    print_parts(ours);
     std::printf("%-26s %-7s %12zu %10.1f %9.3f %12.1f %12.1f %8.2f%s\n", "", "Bonxai", bx.known,
                 bx.added_mb, bx.seconds, bx_b, bx.structure_mb, ours_b / bx_b,
                 ours_b <= bx_b ? "" : "  (knnocc needs more per known voxel)");

@@ -3,6 +3,7 @@
 // byte marks. (The insert_threads.* cases also run under ThreadSanitizer: ctest -R tsan.)
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -11,6 +12,7 @@
 #include <memory>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include <knnocc/insertion/scan_inserter.hpp>
@@ -278,4 +280,66 @@ TEST_CASE("insert_threads.memory_limit_covers_the_scratch") {
       CHECK(out.voxels == unlimited.voxels);
     }
   }
+}
+
+TEST_CASE("insert_threads.one_thread_applies_the_dense_scratch_without_brick_records") {
+  // One thread and no map memory limit: the dense scratch goes into the map brick row by brick
+  // row, with no record per touched brick (ScratchUsage::brick_groups stays 0), and a scan with few
+  // points for its box (the room spread 4 times wider, no max range) keeps its hits as codes, with
+  // no hit bitmap. The map is the one the two-step path builds (threads, or a memory limit): same
+  // voxels in storage order, same statistics, same memory (a fresh map's room for the first
+  // scan's bricks), same changes recorded under change detection.
+  const auto room = random_scans(5, 3, 12000);
+  struct Run {
+    std::vector<std::tuple<std::uint64_t, float>> voxels;
+    std::vector<std::size_t> stats;
+    std::size_t memory = 0;
+    std::vector<std::pair<std::uint64_t, bool>> changes;
+    bool operator==(const Run& o) const {
+      return voxels == o.voxels && stats == o.stats && memory == o.memory && changes == o.changes;
+    }
+  };
+  for (const bool changes : {false, true})
+    for (const float spread : {1.0f, 4.0f}) {
+      CAPTURE(changes);
+      CAPTURE(spread);
+      auto scans = room;
+      for (auto& s : scans)
+        for (auto& p : s.points) p = Point3f{p.x * spread, p.y * spread, p.z * spread};
+      const double max_range = spread > 1 ? -1.0 : 4.0;
+      std::vector<Run> runs;
+      for (const unsigned threads : {1u, 2u}) {
+        for (const std::size_t limit : {std::size_t{0}, std::size_t{1} << 30}) {
+          CAPTURE(threads);
+          CAPTURE(limit);
+          OccupancyMap<OcKey> map(0.1);
+          map.enable_change_detection(changes);
+          map.set_memory_limit(limit);
+          knnocc::ScanInserter<OcKey> inserter(map, {}, threads);
+          Run run;
+          for (const auto& s : scans) {
+            const auto st = inserter.insert_point_cloud(s.origin, s.points, max_range);
+            REQUIRE(st.chunks > 1);  // the chunked path, dense scratch
+            run.stats.insert(run.stats.end(), {st.ray_keys, st.occupied_voxels, st.free_voxels});
+          }
+          const knnocc::ScratchUsage used = inserter.scratch_usage();
+          CHECK((used.hit_bitmaps == 0) == (spread > 1 && threads == 1 && limit == 0));
+          CHECK(used.miss_bitmaps > 0);
+          CHECK((used.brick_groups == 0) == (threads == 1 && limit == 0));
+          map.for_each_voxel(
+              [&](const OcKey& k, float v) { run.voxels.emplace_back(k.pack(), v); });
+          run.memory = map.memory_usage();
+          map.for_each_changed_key(
+              [&](const OcKey& k, bool created) { run.changes.emplace_back(k.pack(), created); });
+          std::sort(run.changes.begin(), run.changes.end());
+          CHECK(run.changes.empty() != changes);
+          runs.push_back(std::move(run));
+        }
+      }
+      REQUIRE(runs.front().voxels.size() > 10000);
+      for (std::size_t i = 1; i < runs.size(); ++i) {
+        CAPTURE(i);
+        CHECK(runs[i] == runs.front());
+      }
+    }
 }

@@ -27,13 +27,17 @@
 //      Large scans whose dense box is known in advance run 1 and 2 a chunk of points at a time
 //      (insert_chunked): each thread takes chunks in turn, collects them (the hits straight into
 //      its hit bitmap) and walks their rays into its own scratch, all in one run of the threads;
-//      this bounds the per-point buffers.
+//      this bounds the per-point buffers. With one thread, a scan with few points for its box
+//      keeps its hits as 4-byte codes instead of a hit bitmap (detail/hit_codes.hpp).
 //   3. apply (detail/brick_updates.hpp): the touched bricks with the thread scratches OR-ed,
 //      gathered in z, y, x brick order whatever the path or thread count; the missing map bricks
 //      created in that order (one thread), then every touched voxel updated exactly once,
 //      occupied first (each brick by one thread); a rated scan's endpoint voxels then get their
-//      sums (eq 15, detail/rated_sums.hpp).
-// The scratch is kept between scans, so a warmed-up inserter allocates nothing per scan.
+//      sums (eq 15, detail/rated_sums.hpp). One thread with no map memory limit takes the dense
+//      scratch brick row by brick row and updates each touched brick as it is found, in the same
+//      order, without a record per brick (apply_dense_serial): the same map, less memory.
+// The scratch is kept between scans, so a warmed-up inserter allocates nothing per scan;
+// scratch_usage() tells what it holds, part by part.
 //
 // ScanInserter is the scan integrator of Mapper (mapper.hpp): `insert_point_cloud` applies a scan
 // with the model's fixed hit and miss log-odds, `insert_rated` a scan whose endpoints the sensor
@@ -114,6 +118,27 @@ class ScanInserter {
   /// reports MemoryLimitError before allocating, and the dense scratch takes at most half of
   /// the room the map leaves (scratch_limit() still bounds it).
   std::size_t memory_usage() const { return apply_scratch_bytes(); }
+
+  /// All the scratch kept between scans, by part (what the benches print).
+  ScratchUsage scratch_usage() const {
+    ScratchUsage u;
+    for (unsigned t = 0; t < scratch_.size(); ++t) {
+      const detail::ThreadScratch& s = *scratch_[t];
+      u.hit_bitmaps += s.hit.capacity_bytes();
+      u.miss_bitmaps += s.miss.capacity_bytes();
+      u.point_buffers += s.part.rays.capacity_bytes() + s.part.hits.capacity_bytes() +
+                         s.part.hit_logodds.capacity() * sizeof(float) +
+                         s.hit_list.capacity_bytes();
+      u.ray_blocks += sizeof(*s.block);
+      u.hashed += s.hashed.memory_usage();
+      u.other += (s.row_hit.capacity() + s.row_miss.capacity()) * sizeof(VoxelMask) +
+                 s.hit_codes.memory_usage() + s.row_any.capacity() * sizeof(std::uint64_t);
+    }
+    u.brick_groups = bricks_.memory_usage() + order_.capacity() * sizeof(std::uint32_t);
+    u.other += first_chunk_.capacity() * sizeof(std::size_t) +
+               endpoints_.capacity() * sizeof(std::uint64_t) + sums_.capacity() * sizeof(sums_[0]);
+    return u;
+  }
 
   /// Inserts one scan of world-frame points seen from `origin`. max_range < 0: no limit;
   /// max_range == 0 or NaN is rejected (std::invalid_argument; abort without exceptions).
@@ -260,18 +285,18 @@ class ScanInserter {
       };
       team_.run(job);
       add_visits(st);
-      detail::gather_dense<Key>(team_, scratch_, bricks_);
-    } else {
-      // The threads' hashed scratch shares the room the map leaves under its limit.
-      const std::size_t elsewhere =
-          in_map + bricks_.memory_usage() + order_.capacity() * sizeof(std::uint32_t);
-      if (limit && elsewhere >= limit) detail::memory_limit_exceeded(limit, elsewhere);
-      for (unsigned t = 0; t < threads(); ++t)
-        scratch(t).hashed.set_cap(limit ? (limit - elsewhere) / threads() : 0, limit, elsewhere);
-      walk_hashed(o, rays);
-      add_visits(st);
-      detail::gather_hashed<Key>(scratch_, threads(), order_, bricks_, limit, in_map);
+      apply_dense(values, st);
+      return;
     }
+    // The threads' hashed scratch shares the room the map leaves under its limit.
+    const std::size_t elsewhere =
+        in_map + bricks_.memory_usage() + order_.capacity() * sizeof(std::uint32_t);
+    if (limit && elsewhere >= limit) detail::memory_limit_exceeded(limit, elsewhere);
+    for (unsigned t = 0; t < threads(); ++t)
+      scratch(t).hashed.set_cap(limit ? (limit - elsewhere) / threads() : 0, limit, elsewhere);
+    walk_hashed(o, rays);
+    add_visits(st);
+    detail::gather_hashed<Key>(scratch_, threads(), order_, bricks_, limit, in_map);
     apply(values, st);
   }
 
@@ -304,10 +329,10 @@ class ScanInserter {
     for (unsigned t = 0; t < threads(); ++t) st.ray_keys += scratch(t).visits;
   }
 
-  // The dense path's bitmaps of the box, all zero.
-  void prepare_dense(const detail::DenseBox& box) {
+  // The dense path's bitmaps of the box, all zero (the hit bitmaps only if `hit_bitmaps`).
+  void prepare_dense(const detail::DenseBox& box, bool hit_bitmaps = true) {
     for (unsigned t = 0; t < threads(); ++t) {
-      scratch(t).hit.reshape(box.lo, box.size);
+      if (hit_bitmaps) scratch(t).hit.reshape(box.lo, box.size);
       scratch(t).miss.reshape(box.lo, box.size, box.byte_marks);
     }
   }
@@ -369,7 +394,20 @@ class ScanInserter {
 
   void apply(const detail::ScanValues& values, ScanStats& st) {
     const ScratchCounted counted(*map_, apply_scratch_bytes());
-    const detail::UpdateCounts c = detail::apply_updates(*map_, bricks_, values, team_, scratch_);
+    add_updates(detail::apply_updates(*map_, bricks_, values, team_, scratch_), values, st);
+  }
+  // The dense scratch into the map: with one thread and no memory limit brick row by brick row,
+  // without the touched bricks' records (the limit refuses a scan's bricks before any is made).
+  // codes: the hits are in scratch(0).hit_list (one thread, no limit only).
+  void apply_dense(const detail::ScanValues& values, ScanStats& st, bool codes = false) {
+    if (threads() == 1 && !map_->memory_limit()) {
+      add_updates(detail::apply_dense_serial(*map_, scratch(0), values, codes), values, st);
+      return;
+    }
+    detail::gather_dense<Key>(team_, scratch_, bricks_);
+    apply(values, st);
+  }
+  void add_updates(const detail::UpdateCounts& c, const detail::ScanValues& values, ScanStats& st) {
     st.occupied_voxels += c.occupied;
     st.free_voxels += c.free;
     if (values.rated)
@@ -398,7 +436,16 @@ class ScanInserter {
 
     st.byte_marks = box->byte_marks;
     start_parts(o);
-    prepare_dense(*box);
+    // One thread, no memory limit: a scan with few points for its box keeps its hits as codes (4
+    // bytes a hit, detail/hit_codes.hpp) rather than in a hit bitmap (a bit per voxel of the box).
+    const auto voxels = static_cast<std::size_t>(box->size[0] * box->size[1] * box->size[2]);
+    const bool codes = threads() == 1 && !map_->memory_limit() && n * 64 <= voxels &&
+                       scratch(0).hit_codes.shape(box->lo, box->size);
+    if (codes) {  // room for every point's hit at once: no copies as the chunks come in
+      scratch(0).hit_list.clear();
+      scratch(0).hit_list.reserve(n);
+    }
+    prepare_dense(*box, !codes);
     const detail::RayFan fan = dense_fan(o, *box);
     for (unsigned t = 0; t < threads(); ++t)  // here: a thread may get no chunk of this scan
       scratch(t).part.rays.reserve(chunk_points);
@@ -412,6 +459,10 @@ class ScanInserter {
         part.rays.clear();
         detail::Collector<Key> collect_chunk = collector(t, o, max_range);
         collect_chunk.hit_map = &mine.hit;
+        if (codes) {
+          collect_chunk.hit_codes = &mine.hit_codes;
+          collect_chunk.hit_list = &mine.hit_list;
+        }
         collect_chunk.add_chunk(first + static_cast<std::ptrdiff_t>(a),
                                 first + static_cast<std::ptrdiff_t>(b));
         bool given = false;  // the chunk's rays, handed out once
@@ -427,8 +478,7 @@ class ScanInserter {
     for (unsigned t = 0; t < threads(); ++t) add_counts(scratch(t).part.counts, st);
     add_visits(st);
     st.chunks = chunks.size();
-    detail::gather_dense<Key>(team_, scratch_, bricks_);
-    apply(values, st);
+    apply_dense(values, st, codes);
     return true;
   }
 

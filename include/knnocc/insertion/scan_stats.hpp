@@ -27,4 +27,22 @@ struct ScanStats {
   bool byte_marks = false;
 };
 
+/// The scratch a ScanInserter keeps between scans, in bytes by part (ScanInserter::scratch_usage):
+/// address space held; pages no scan touched are not resident, and blocks of 1 MB or more are
+/// mapped and made resident 2 MB at a time (core/detail/huge_pages.hpp).
+struct ScratchUsage {
+  std::size_t hit_bitmaps = 0;   ///< walk, dense scratch: endpoint bits of the scan's box
+  std::size_t miss_bitmaps = 0;  ///< walk, dense scratch: free-voxel bits or bytes of the box
+  std::size_t point_buffers =
+      0;                       ///< collect: rays and hits of the points (or of a chunk), hit codes
+  std::size_t ray_blocks = 0;  ///< walk: rays set up for the bundled walk
+  std::size_t hashed = 0;      ///< walk, hashed scratch: masks of the touched bricks
+  std::size_t brick_groups = 0;  ///< apply: touched bricks with their masks, and their order
+  std::size_t other = 0;         ///< apply rows, rated sums, discretized keys, chunk sums
+
+  std::size_t total() const {
+    return hit_bitmaps + miss_bitmaps + point_buffers + ray_blocks + hashed + brick_groups + other;
+  }
+};
+
 }  // namespace knnocc

@@ -26,6 +26,7 @@ class AppendBuffer {
   const T* end() const { return data() + size_; }
   const T& operator[](std::size_t i) const { return storage_[i]; }
 
+  std::size_t capacity_bytes() const { return storage_.capacity() * sizeof(T); }
   void clear() { size_ = 0; }
   /// Room for n elements in all (grown with an eighth to spare: buffers of slowly growing scans
   /// do not each take a fresh block).

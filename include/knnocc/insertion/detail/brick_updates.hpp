@@ -4,6 +4,8 @@
 // whatever the path or the thread count; the missing map bricks are created in that order by one
 // thread (the map's storage order never depends on the path or the thread count); then every
 // touched voxel gets exactly one update, occupied first (occupied wins), each brick by one thread.
+// With one thread and no map memory limit, apply_dense_serial does both steps brick row by brick
+// row from the dense scratch, keeping no record per touched brick.
 
 #include <algorithm>
 #include <array>
@@ -14,6 +16,7 @@
 #include "../../map/brick.hpp"
 #include "../../map/occupancy_map.hpp"
 #include "hashed_marks.hpp"
+#include "hit_codes.hpp"
 #include "scan_bitmap.hpp"
 #include "thread_scratch.hpp"
 #include "work_queue.hpp"
@@ -112,6 +115,104 @@ void gather_dense(Team& team, ThreadScratches& scratch, BrickGroups& out) {
     scratch[t]->hit.mark_clean();
     scratch[t]->miss.mark_clean();
   }
+}
+
+/// One thread, no memory limit on the map: what gather_dense and apply_updates do, in the same
+/// order, without a record per touched brick (144 bytes each, megabytes for a large scan): each
+/// brick row of the thread's dense bitmaps is taken (and cleared), its touched bricks created and
+/// updated at once, in z, y, x order. With `codes` the hits come from s.hit_list (HitCodes, sorted
+/// here) instead of the hit bitmap. A fresh map first gets room for every touched brick (counted
+/// in a pass that leaves the scratch as it is), as apply_updates gives it. The same map, pool
+/// order and counts as the two-step path.
+template <class Key>
+UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const ScanValues& values,
+                                bool codes = false) {
+  using layout = BrickLayout<Key>;
+  ScanBitmap& hit = s.hit;
+  ScanBitmap& miss = s.miss;  // the box's shape (the hit bitmap has it too unless `codes`)
+  const std::int64_t nbx = miss.bricks(0), nby = miss.bricks(1), nbz = miss.bricks(2);
+  const std::int64_t* lo = miss.lo();
+  s.row_hit.resize(static_cast<std::size_t>(nbx));
+  s.row_miss.resize(static_cast<std::size_t>(nbx));
+  VoxelMask* row_hit = s.row_hit.data();
+  VoxelMask* row_miss = s.row_miss.data();
+  if (codes) s.hit_codes.by_row(s.hit_list.data(), s.hit_list.size());
+  // Row (by, bz)'s hits into row_hit (from the hit bitmap, clearing it, or from the codes).
+  auto take_hits = [&](std::int64_t by, std::int64_t bz) {
+    if (!codes) {
+      hit.take_brick_row(by, bz, row_hit);
+      return;
+    }
+    const auto r = static_cast<std::size_t>(bz * nby + by);
+    const std::uint32_t* list = s.hit_list.data();
+    for (std::size_t j = s.hit_codes.row_start(r), e = s.hit_codes.row_start(r + 1); j < e; ++j)
+      row_hit[s.hit_codes.brick_of(list[j])].set(HitCodes::local_of(list[j]));
+  };
+  if (map.num_bricks() == 0) {  // a fresh map: all are new
+    // Per brick row, which bricks the rows of each bitmap touch (the codes' bricks added to the
+    // miss bitmap's), then how many.
+    const bool alike = codes || hit.row_words() == miss.row_words();  // both bits
+    const std::int64_t hit_words = alike ? 0 : hit.row_words(), miss_words = miss.row_words();
+    s.row_any.resize(static_cast<std::size_t>(hit_words + miss_words));
+    std::uint64_t* any_miss = s.row_any.data();
+    std::uint64_t* any_hit = alike ? any_miss : any_miss + miss_words;
+    std::size_t touched = 0;
+    for (std::int64_t bz = 0; bz < nbz; ++bz)
+      for (std::int64_t by = 0; by < nby; ++by) {
+        std::fill(s.row_any.begin(), s.row_any.end(), std::uint64_t{0});
+        miss.or_brick_row(by, bz, any_miss);
+        if (codes) {
+          const auto r = static_cast<std::size_t>(bz * nby + by);
+          for (std::size_t j = s.hit_codes.row_start(r), e = s.hit_codes.row_start(r + 1); j < e;
+               ++j)
+            miss.add_brick(any_miss,
+                           static_cast<std::int64_t>(s.hit_codes.brick_of(s.hit_list[j])));
+        } else {
+          hit.or_brick_row(by, bz, any_hit);
+        }
+        if (alike) {
+          touched += miss.bricks_in(any_miss);
+          continue;
+        }
+        for (std::int64_t bx = 0; bx < nbx; ++bx)
+          touched += hit.brick_in(any_hit, bx) || miss.brick_in(any_miss, bx);
+      }
+    map.reserve_bricks(touched);
+  }
+  const bool hits_here = !values.rated;  // rated hits carry their own sums
+  const bool records = map.change_detection_enabled();
+  UpdateCounts c;
+  for (std::int64_t bz = 0; bz < nbz; ++bz)
+    for (std::int64_t by = 0; by < nby; ++by) {
+      take_hits(by, bz);
+      miss.take_brick_row(by, bz, row_miss);
+      for (std::int64_t bx = 0; bx < nbx; ++bx) {
+        VoxelMask& h = row_hit[bx];
+        VoxelMask& m = row_miss[bx];
+        if (!h.any() && !m.any()) continue;
+        const std::uint32_t slot = map.brick_slot(layout::pack_brick(
+            (lo[0] >> kBrickBits) + bx, (lo[1] >> kBrickBits) + by, (lo[2] >> kBrickBits) + bz));
+        for (std::size_t i = 0; i < m.w.size(); ++i) m.w[i] &= ~h.w[i];  // hit wins
+        auto& brick = map.brick_at(slot);
+        const int masks = int(hits_here && h.any()) + int(m.any());
+        if (masks > 1 || brick.known.any() || records) map.prepare_values(brick);
+        if (records) {
+          if (hits_here) map.update_masked(brick, h, values.hit);
+          map.update_masked(brick, m, values.miss);
+        } else {
+          if (hits_here) c.added += map.update_brick(brick, h, values.hit);
+          c.added += map.update_brick(brick, m, values.miss);
+        }
+        if (hits_here) c.occupied += static_cast<std::size_t>(h.count());
+        c.free += static_cast<std::size_t>(m.count());
+        h.clear();
+        m.clear();
+      }
+    }
+  if (!codes) hit.mark_clean();
+  miss.mark_clean();
+  if (!records) map.add_known(c.added);
+  return c;
 }
 
 /// Gathers the hashed scratch into `out` (groups of 256 bricks in z, y, x order), leaving every

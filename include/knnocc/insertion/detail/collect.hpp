@@ -28,6 +28,7 @@
 #include "../../raycast/detail/linear_ray.hpp"
 #include "../../sensor/endpoint_rating.hpp"
 #include "append_buffer.hpp"
+#include "hit_codes.hpp"
 #include "point_bounds.hpp"
 #include "point_keys.hpp"
 #include "scan_bitmap.hpp"
@@ -159,8 +160,11 @@ struct Collector {
   const double max_range;
   const KeyRounding<Key> rounding;
   ScanPart& part;
-  // Chunks (add_chunk): the thread's hit bitmap, which takes the hits in place of part.hits.
+  // Chunks (add_chunk): the thread's hit bitmap, which takes the hits in place of part.hits; or,
+  // with hit_codes set, their codes appended to hit_list.
   ScanBitmap* hit_map = nullptr;
+  const HitCodes* hit_codes = nullptr;
+  AppendBuffer<std::uint32_t>* hit_list = nullptr;
 
   // What a loop over points counts, in registers while it runs (the part's fields are stored to
   // after every point otherwise: the compiler cannot tell them from the buffers' contents).
@@ -170,6 +174,8 @@ struct Collector {
     PointCounts counts;
     std::uint64_t* hit = nullptr;  // the next hit and ray go here (room made by the caller)
     RayEnd* ray = nullptr;
+    std::uint32_t* code = nullptr;  // chunks with hit_codes: the next hit's code goes here
+    std::uint32_t last_code = ~std::uint32_t{0};  // ...unless it repeats this one (no code is ~0)
   };
   Tally start() const {
     Tally t;
@@ -178,6 +184,7 @@ struct Collector {
   }
   void finish(const Tally& t) {
     if (t.hit) part.hits.set_end(t.hit);  // null: add_chunk, whose hits went to hit_map
+    if (t.code) hit_list->set_end(t.code);
     part.rays.set_end(t.ray);
     part.box = t.box;
     part.steps += t.steps;
@@ -205,6 +212,7 @@ struct Collector {
     const auto n = static_cast<std::size_t>(std::distance(first, last));
     Tally t = start();
     if (!Chunk) t.hit = part.hits.room_for(n);
+    if (Chunk && hit_codes) t.code = hit_list->room_for(n);
     t.ray = part.rays.room_for(n);
 #if KNNOCC_AVX2_LANES
     // Chunks of contiguous Point3f without max_range: the keys eight points at a time.
@@ -221,7 +229,7 @@ struct Collector {
           t.counts.points += 8;
           for (int j = 0; j < 8; ++j) {
             const std::int64_t k[3] = {key[0][j], key[1][j], key[2][j]};
-            set_bit(hit_map->words(), hit_map->index(k[0], k[1], k[2]));
+            chunk_hit(k, t);
             add_ray<false, Chunk>(p[i + static_cast<std::size_t>(j)], k, t);
           }
         }
@@ -255,7 +263,7 @@ struct Collector {
       }
       // Even when the origin is out of range, as OctoMap.
       if constexpr (Chunk) {
-        set_bit(hit_map->words(), hit_map->index(k[0], k[1], k[2]));
+        chunk_hit(k, t);
       } else {
         *t.hit++ = pack_key<Key>(k);
         t.box.extend(k);
@@ -271,6 +279,17 @@ struct Collector {
         if (!r->casts_ray) return;
       const Point3f e = truncate_ray(o, p, max_range);
       if (rounding.point_to_key(e, k)) add_ray<!Chunk, Chunk>(e, k, t);
+    }
+  }
+
+  KNNOCC_ALWAYS_INLINE void chunk_hit(const std::int64_t (&k)[3], Tally& t) {
+    if (t.code) {  // a repeat of the previous hit (neighbouring points) is not stored again
+      const std::uint32_t c = hit_codes->code(k);
+      *t.code = c;
+      t.code += c != t.last_code;
+      t.last_code = c;
+    } else {
+      set_bit(hit_map->words(), hit_map->index(k[0], k[1], k[2]));
     }
   }
 

@@ -66,6 +66,8 @@ class ScanBitmap {
   /// Bytes: voxel i is byte i, 0 or 1.
   std::uint8_t* bytes() { return reinterpret_cast<std::uint8_t*>(bits_.get()); }
   bool has_bytes() const { return bytes_; }
+  /// Bytes of address space held (pages no mark touched are not resident).
+  std::size_t capacity_bytes() const { return capacity_ * sizeof(std::uint64_t); }
 
   const std::int64_t* lo() const { return lo_; }
   /// Number of bricks along axis a.
@@ -105,6 +107,46 @@ class ScanBitmap {
         }
       }
     }
+  }
+
+  /// Words per row of voxels along x.
+  std::int64_t row_words() const { return n_[0] / (bytes_ ? 8 : 64); }
+  /// ORs the 64 rows of the brick row (by, bz) into acc[0..row_words()), leaving the bits: then
+  /// brick bx has a bit set iff brick_in(acc, bx).
+  void or_brick_row(std::int64_t by, std::int64_t bz, std::uint64_t* acc) const {
+    const std::int64_t words = row_words();
+    for (int lz = 0; lz < kBrickEdge; ++lz) {
+      const std::uint64_t* row =
+          bits_.get() + ((bz * kBrickEdge + lz) * n_[1] + by * kBrickEdge) * words;
+      for (int ly = 0; ly < kBrickEdge; ++ly, row += words)
+        for (std::int64_t w = 0; w < words; ++w) acc[w] |= row[w];
+    }
+  }
+  bool brick_in(const std::uint64_t* acc, std::int64_t bx) const {
+    return bytes_ ? acc[bx] != 0 : ((acc[bx >> 3] >> (8 * (bx & 7))) & 0xff) != 0;
+  }
+  /// Makes brick_in(acc, bx) true.
+  void add_brick(std::uint64_t* acc, std::int64_t bx) const {
+    if (bytes_)
+      acc[bx] |= 1;
+    else
+      acc[bx >> 3] |= std::uint64_t{1} << (8 * (bx & 7));
+  }
+  /// The bricks bx with brick_in(acc, bx).
+  std::size_t bricks_in(const std::uint64_t* acc) const {
+    std::size_t n = 0;
+    for (std::int64_t i = 0; i < row_words(); ++i) {
+      std::uint64_t w = acc[i];
+      if (bytes_) {
+        n += w != 0;
+        continue;
+      }
+      w |= w >> 4;  // bit 8 b of w: whether byte b has a bit set
+      w |= w >> 2;
+      w |= w >> 1;
+      n += static_cast<std::size_t>(popcount64(w & 0x0101010101010101ull));
+    }
+    return n;
   }
 
   /// The 8 bytes of w, each 0 or 1, as 8 bits (byte k to bit k). Byte k times 2^(7 (8 - k)) lands

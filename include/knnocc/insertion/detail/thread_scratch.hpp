@@ -5,13 +5,16 @@
 // (phase 3). Each thread's scratch is a separate allocation, so threads share no cache lines.
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
 #include "../../map/brick.hpp"
 #include "../../raycast/detail/ray_block.hpp"
+#include "append_buffer.hpp"
 #include "collect.hpp"
 #include "hashed_marks.hpp"
+#include "hit_codes.hpp"
 #include "scan_bitmap.hpp"
 
 namespace knnocc::detail {
@@ -22,13 +25,16 @@ struct UpdateCounts {
 };
 
 struct ThreadScratch {
-  ScanPart part;         // collect: this thread's share of the points
-  PointBounds bounds;    // collect, chunked scans: the bounds of its share
-  ScanBitmap hit, miss;  // walk, dense scratch: endpoints and free voxels
-  HashedMarks hashed;    // walk, hashed scratch
+  ScanPart part;                         // collect: this thread's share of the points
+  PointBounds bounds;                    // collect, chunked scans: the bounds of its share
+  ScanBitmap hit, miss;                  // walk, dense scratch: endpoints and free voxels
+  AppendBuffer<std::uint32_t> hit_list;  // collect, chunked scans with few points: hit codes
+  HitCodes hit_codes;                    // their encoding, and their order by brick row
+  HashedMarks hashed;                    // walk, hashed scratch
   std::unique_ptr<RayBlock> block = std::make_unique<RayBlock>();  // walk: rays set up
   std::size_t visits = 0;                                          // walk: voxels visited
   std::vector<VoxelMask> row_hit, row_miss;  // apply: one row of bricks of the dense scratch
+  std::vector<std::uint64_t> row_any;        // apply, fresh map: which bricks of a row are touched
   UpdateCounts counts;                       // apply
 };
 

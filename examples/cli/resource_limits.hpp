@@ -174,6 +174,27 @@ inline OccupancyMap<OcKey> read_tree_checked(const std::string& path) {
 inline constexpr std::size_t kBrickBytesAtLeast =
     sizeof(OccupancyMap<OcKey>::Brick) + 2 * (sizeof(std::uint64_t) + sizeof(std::uint32_t));
 
+/// The part of each ray from `origin` that a scan stores, as the map sees it: endpoints beyond
+/// the key range (32768 voxels from the centre) are skipped, rays are cut at max_range (> 0).
+struct StoredRays {
+  Point3d origin;
+  double reach, max_range;
+  StoredRays(const Point3d& o, double res, double cut)
+      : origin(o), reach(32768.0 * res), max_range(cut) {}
+  bool in_range(double x, double y, double z) const {
+    return std::fabs(x) < reach && std::fabs(y) < reach && std::fabs(z) < reach;
+  }
+  /// Length of the stored part of the ray to p (-1 for a skipped point); `full`: the whole ray.
+  template <class P>
+  double length(const P& p, double& full) const {
+    const double dx = double(p.x) - origin.x, dy = double(p.y) - origin.y,
+                 dz = double(p.z) - origin.z;
+    full = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!std::isfinite(full) || !in_range(p.x, p.y, p.z)) return -1.0;
+    return max_range > 0 ? std::min(full, max_range) : full;
+  }
+};
+
 /// A lower bound on the bricks the rays of one scan (from `origin`, cut at max_range when > 0)
 /// pass through, from their directions and lengths alone, in one pass over the points per angle:
 ///   - of two rays at least theta apart, a point at range r on one is at least r sin(theta) from
@@ -189,24 +210,19 @@ template <class P>
 double at_least_bricks_by_angle(const Point3d& origin, const std::vector<P>& pts, double res,
                                 double max_range) {
   const double edge = res * kBrickEdge, chord = std::sqrt(3.0) * edge;
-  const double reach = 32768.0 * res;  // the key range: farther endpoints are skipped
-  auto in_range = [&](double x, double y, double z) {
-    return std::fabs(x) < reach && std::fabs(y) < reach && std::fabs(z) < reach;
-  };
-  if (!in_range(origin.x, origin.y, origin.z)) return 0;
+  const StoredRays stored(origin, res, max_range);
+  if (!stored.in_range(origin.x, origin.y, origin.z)) return 0;
   struct Ray {
     double x, y, z, l;  // unit direction, stored length
   };
   std::vector<Ray> rays;
   rays.reserve(pts.size());
-  double longest = 0;
+  double longest = 0, full = 0;
   for (const P& p : pts) {
-    const double dx = double(p.x) - origin.x, dy = double(p.y) - origin.y,
-                 dz = double(p.z) - origin.z;
-    const double full = std::sqrt(dx * dx + dy * dy + dz * dz);
-    if (!std::isfinite(full) || full == 0 || !in_range(p.x, p.y, p.z)) continue;
-    const double l = max_range > 0 ? std::min(full, max_range) : full;
-    rays.push_back({dx / full, dy / full, dz / full, l});
+    const double l = stored.length(p, full);
+    if (l < 0 || full == 0) continue;
+    rays.push_back({(double(p.x) - origin.x) / full, (double(p.y) - origin.y) / full,
+                    (double(p.z) - origin.z) / full, l});
     longest = std::max(longest, l);
   }
   double best = 0;
@@ -268,22 +284,11 @@ template <class P>
 std::size_t at_least_bricks(const Point3d& origin, const std::vector<P>& pts, double res,
                             double max_range, bool rays, std::size_t enough) {
   const double edge = res * kBrickEdge;
-  const double reach = 32768.0 * res;  // the key range: farther endpoints are skipped, not mapped
-  auto in_range = [&](double x, double y, double z) {
-    return std::fabs(x) < reach && std::fabs(y) < reach && std::fabs(z) < reach;
-  };
-  if (!in_range(origin.x, origin.y, origin.z)) return 0;
-  // Length of the stored part of the ray to p (0 for a skipped point).
-  auto length = [&](const P& p, double& full) {
-    const double dx = double(p.x) - origin.x, dy = double(p.y) - origin.y,
-                 dz = double(p.z) - origin.z;
-    full = std::sqrt(dx * dx + dy * dy + dz * dz);
-    if (!std::isfinite(full) || !in_range(p.x, p.y, p.z)) return -1.0;
-    return max_range > 0 ? std::min(full, max_range) : full;
-  };
+  const StoredRays stored(origin, res, max_range);
+  if (!stored.in_range(origin.x, origin.y, origin.z)) return 0;
   double samples = 0, full = 0;
   for (const P& p : pts) {
-    const double l = length(p, full);
+    const double l = stored.length(p, full);
     if (l >= 0) samples += rays ? 2 + std::floor(l / edge) : 1;
   }
   if (samples <= double(enough)) return 0;  // cannot reach `enough`: nothing to refuse
@@ -306,7 +311,7 @@ std::size_t at_least_bricks(const Point3d& origin, const std::vector<P>& pts, do
   };
   for (std::size_t i = 0; i < pts.size() && seen.size() <= enough; i += stride) {
     const P& p = pts[i];
-    const double l = length(p, full);
+    const double l = stored.length(p, full);
     if (l < 0) continue;
     if (!rays || full == 0) {
       add(p.x, p.y, p.z);

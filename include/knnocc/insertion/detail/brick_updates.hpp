@@ -143,10 +143,8 @@ UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const 
       hit.take_brick_row(by, bz, row_hit);
       return;
     }
-    const auto r = static_cast<std::size_t>(bz * nby + by);
-    const std::uint32_t* list = s.hit_list.data();
-    for (std::size_t j = s.hit_codes.row_start(r), e = s.hit_codes.row_start(r + 1); j < e; ++j)
-      row_hit[s.hit_codes.brick_of(list[j])].set(HitCodes::local_of(list[j]));
+    s.hit_codes.for_row(s.hit_list.data(), static_cast<std::size_t>(bz * nby + by),
+                        [&](std::size_t bx, int local) { row_hit[bx].set(local); });
   };
   if (map.num_bricks() == 0) {  // a fresh map: all are new
     // Per brick row, which bricks the rows of each bitmap touch (the codes' bricks added to the
@@ -162,11 +160,10 @@ UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const 
         std::fill(s.row_any.begin(), s.row_any.end(), std::uint64_t{0});
         miss.or_brick_row(by, bz, any_miss);
         if (codes) {
-          const auto r = static_cast<std::size_t>(bz * nby + by);
-          for (std::size_t j = s.hit_codes.row_start(r), e = s.hit_codes.row_start(r + 1); j < e;
-               ++j)
-            miss.add_brick(any_miss,
-                           static_cast<std::int64_t>(s.hit_codes.brick_of(s.hit_list[j])));
+          s.hit_codes.for_row(s.hit_list.data(), static_cast<std::size_t>(bz * nby + by),
+                              [&](std::size_t bx, int) {
+                                miss.add_brick(any_miss, static_cast<std::int64_t>(bx));
+                              });
         } else {
           hit.or_brick_row(by, bz, any_hit);
         }

@@ -64,6 +64,12 @@ class HitCodes {
       }
   }
   std::size_t row_start(std::size_t r) const { return start_[r]; }
+  /// f(brick bx in the row, index in the brick) for each of brick row r's codes (after by_row).
+  template <class F>
+  void for_row(const std::uint32_t* codes, std::size_t r, F&& f) const {
+    for (std::size_t j = start_[r], e = start_[r + 1]; j < e; ++j)
+      f(brick_of(codes[j]), local_of(codes[j]));
+  }
 
   std::size_t memory_usage() const {
     return (start_.capacity() + next_.capacity()) * sizeof(std::size_t);

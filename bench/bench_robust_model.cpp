@@ -105,10 +105,10 @@ std::vector<Variant> all_variants(bool ablate) {
   p = {};
   p.support_scale = 0;
   v.push_back({"-support", p});
-  for (double scale : {1.5, 3.0}) {
+  for (double scale : {1.5, 2.0, 3.0}) {
     p = {};
     p.support_scale = scale;
-    v.push_back({scale == 1.5 ? "sup*1.5" : "sup*3", p});
+    v.push_back({scale == 1.5 ? "sup*1.5" : scale == 2.0 ? "sup*2" : "sup*3", p});
   }
   p = {};
   p.min_support = 2;
@@ -131,13 +131,6 @@ std::vector<Variant> all_variants(bool ablate) {
   p = {};
   p.ray_views = 5;
   v.push_back({"ray5", p});
-  p = {};
-  p.min_views = 2;
-  p.support_scale = 1.75;
-  v.push_back({"v2sup1.75", p});
-  p = {};
-  p.support_scale = 1.75;
-  v.push_back({"sup*1.75", p});
   // temporal consistency for patches (min_span, span_support, span_siblings) and lone_span
   p = {};
   p.min_span = 0;
@@ -153,12 +146,12 @@ std::vector<Variant> all_variants(bool ablate) {
   p.span_siblings = 0;
   v.push_back({"span_all", p});  // the span rule for every point, not only patches
   p = {};
-  p.span_support = std::numeric_limits<std::uint32_t>::max();
-  v.push_back({"span_nosup", p});  // no exemption for surrounded points
-  for (std::uint32_t sib : {3u, 5u}) {
+  p.span_support = 8;
+  v.push_back({"span_sup8", p});  // patches surrounded by 8 independent points exempt
+  for (std::uint32_t sib : {2u, 3u, 5u}) {
     p = {};
     p.span_siblings = sib;
-    v.push_back({sib == 3 ? "siblings3" : "siblings5", p});
+    v.push_back({sib == 2 ? "siblings2" : sib == 3 ? "siblings3" : "siblings5", p});
   }
   for (std::uint32_t span : {4u, 7u}) {
     p = {};
@@ -171,6 +164,15 @@ std::vector<Variant> all_variants(bool ablate) {
   p = {};
   p.lone_patches = true;
   v.push_back({"lone_patch", p});  // the lone rule for patches too
+  // structure beside committed structure (near_views)
+  p = {};
+  p.near_views = 0;
+  v.push_back({"-near", p});
+  for (std::uint32_t views : {2u, 3u}) {
+    p = {};
+    p.near_views = views;
+    v.push_back({views == 2 ? "near2" : "near3", p});
+  }
   return v;
 }
 

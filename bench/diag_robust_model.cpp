@@ -156,12 +156,13 @@ void simulator(int seeds, const RobustModelParams& params, const char* label) {
           irr_wrong.insert(e->key);
           wrong_irrel.add(t);
           ++wrong_pts;
-          // its supporters within 2 mu created by another keyframe
+          // its supporters within the support radius created by another keyframe
           bool any_real = false, any = false;
           for (const auto& [id2, t2] : tracks) {
             if (id2 == id || t2.kf[0] == t.kf[0]) continue;
             const double dx = t2.pos.x - t.pos.x, dy = t2.pos.y - t.pos.y, dz = t2.pos.z - t.pos.z;
-            if (dx * dx + dy * dy + dz * dz > 4 * mu * mu) continue;
+            const double r = params.support_scale * mu;
+            if (dx * dx + dy * dy + dz * dz > r * r) continue;
             any = true;
             any_real |= id2 < sim::TreeScene::kOutlierIdBase;
           }
@@ -181,8 +182,8 @@ void simulator(int seeds, const RobustModelParams& params, const char* label) {
         irrel, irrel_wrong, wrong_commit, wrong_pts, consec, real_commit, real_consec);
     std::printf(
         "  wrong points in irrelevant voxels supported by a real point %zu, by other wrong points "
-        "only %zu (within 2 mu, another creator, final cloud)\n",
-        sup_real, sup_wrong_only);
+        "only %zu (within %g mu, another creator, final cloud)\n",
+        sup_real, sup_wrong_only, params.support_scale);
     wrong_irrel.print("committed wrong points in irrelevant voxels:");
     wrong_other.print("committed wrong points elsewhere:");
     real.print("committed real points:");

@@ -5,6 +5,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <random>
 #include <vector>
@@ -114,7 +115,7 @@ TEST_CASE("robust model: the rating rules") {
     CHECK(m.rate(c, dist).logodds == doctest::Approx(4 * l));
     c.committed = true;
     CHECK(m.rate(c, dist).logodds == doctest::Approx(l));
-    CHECK(m.support_radius(4, dist) == doctest::Approx(2.0 * dist.mean()));
+    CHECK(m.support_radius(4, dist) == doctest::Approx(1.75 * dist.mean()));
     CHECK(m.support_radius(1, dist) == 0.0);  // seen once: not counted
     RobustModelParams q;
     q.support_scale = 0;
@@ -146,10 +147,13 @@ TEST_CASE("robust model: the rating rules") {
     c.span = 5;  // min_span (5)
     CHECK(m.rate(c, dist).logodds == doctest::Approx(3 * l));
     c.span = 2;
-    c.support = 8;  // surrounded by span_support (8) independent points: no need to wait
-    CHECK(m.rate(c, dist).logodds == doctest::Approx(3 * l));
-    c.support = 1;
+    c.support = 8;  // surrounded: waits all the same (span_support off by default) ...
+    CHECK(m.rate(c, dist).logodds == 0.0f);
     RobustModelParams q;
+    q.span_support = 8;  // ... unless span_support points exempt it
+    CHECK(RobustModel(q).rate(c, dist).logodds == doctest::Approx(3 * l));
+    c.support = 1;
+    q = {};
     q.min_span = 0;  // off
     CHECK(RobustModel(q).rate(c, dist).logodds == doctest::Approx(3 * l));
     q = {};
@@ -157,7 +161,8 @@ TEST_CASE("robust model: the rating rules") {
     c.siblings = 0;
     CHECK(RobustModel(q).rate(c, dist).logodds == 0.0f);
     CHECK(m.rate(c, dist).logodds == doctest::Approx(3 * l));
-    c.committed = true;  // once committed, the span no longer matters (support not counted)
+    c.committed = true;  // once committed on its own, the span no longer matters (support
+    c.anchor = true;     // not counted)
     c.support = std::numeric_limits<std::uint32_t>::max();
     c.siblings = std::numeric_limits<std::uint32_t>::max();
     CHECK(RobustModel(q).rate(c, dist).logodds == doctest::Approx(l));
@@ -173,6 +178,39 @@ TEST_CASE("robust model: the rating rules") {
     CHECK(m.rate(c, dist).logodds == doctest::Approx(3 * l));
     RobustModelParams q;
     q.lone_span = 0;  // off
+    CHECK(RobustModel(q).rate(c, dist).logodds == 0.0f);
+  }
+  SUBCASE("beside an anchor: a point held back adds its evidence, without a ray") {
+    const double l = logodds(knn.probability(0.05, dist));
+    c.views = 1;
+    CHECK(m.wants_anchors(c));
+    CHECK(m.rate(c, dist).logodds == 0.0f);  // anchors not counted
+    c.anchors = 0;
+    CHECK(m.rate(c, dist).logodds == 0.0f);
+    c.anchors = 2;
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(l));
+    CHECK_FALSE(m.rate(c, dist).casts_ray);
+    c.views = 2;  // the deferred view too, as at confirmation
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(2 * l));
+    CHECK(m.beside_evidence(c, dist) == doctest::Approx(2 * l));
+    c.committed = true;  // added evidence before (beside an anchor): its own only
+    CHECK(m.rate(c, dist).logodds == doctest::Approx(l));
+    c.committed = false;
+    c.views = 3;  // commits on its own: the anchors are not asked for
+    c.support = 1;
+    CHECK_FALSE(m.wants_anchors(c));
+    RobustModelParams q;
+    q.near_views = 0;  // off
+    c.views = 2;
+    CHECK_FALSE(RobustModel(q).wants_anchors(c));
+    CHECK(RobustModel(q).rate(c, dist).logodds == 0.0f);
+    CHECK(RobustModel(q).beside_evidence(c, dist) == 0.0f);
+    q.near_views = 3;  // too few views
+    CHECK(RobustModel(q).rate(c, dist).logodds == 0.0f);
+    q = {};
+    q.contra_min = 1;  // rejected by free-space evidence
+    c.contradictions = 5;
+    CHECK_FALSE(RobustModel(q).wants_anchors(c));
     CHECK(RobustModel(q).rate(c, dist).logodds == 0.0f);
   }
   SUBCASE("invalid parameters are refused") {
@@ -263,27 +301,41 @@ TEST_CASE("robust model in a Mapper: rays of other keyframes through a point tak
 
 TEST_CASE("robust model in a Mapper: independent support against a brute-force count") {
   // Random keyframes observing map points of a few small clusters, each cluster created by one
-  // keyframe, plus scattered points; contradictions off, so a point commits (adds evidence) at
-  // the first keyframe where it is confirmed and another keyframe's point lies within 2 mu (or,
-  // when it is not a patch, lone_span keyframes passed since its creator), unless it is a patch
-  // (span_siblings points of its creator within 2 mu) seen within min_span keyframes of its
-  // creator and not surrounded.
+  // keyframe, plus scattered points; contradictions off. A point commits on its own (becomes an
+  // anchor) at the first keyframe where it is confirmed and another keyframe's point lies within
+  // 1.75 mu (or, when it is not a patch, lone_span keyframes passed since its creator), unless
+  // it is a patch (span_siblings points of its creator within 1.75 mu) seen within min_span
+  // keyframes of its creator and not surrounded. With the near rule, a point seen by near_views
+  // keyframes commits beside an anchor: observed with an anchor of an earlier keyframe in the 27
+  // voxels around it, or at the end of the keyframe that made one there.
   RobustModelParams params;
   params.knn.k = 3;
   params.early_support = 2;  // (12 by default) so that two-view points commit here too
   params.span_siblings = 3;  // (4 by default) a cluster's points are patches here
   params.span_support = 5;
   params.contra_min = 0;
-  SUBCASE("lone rule for points that are not patches (the default)") {}
+  SUBCASE("lone rule for points that are not patches, near rule (the defaults)") {}
   SUBCASE("lone rule for patches too") { params.lone_patches = true; }
+  SUBCASE("near rule off") { params.near_views = 0; }
+  SUBCASE("near rule from two views") { params.near_views = 2; }
   Mapper<RobustModel> m(0.1, RobustModel(params));
+  const Grid<OcKey>& grid = m.map().grid();
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-2.0, 2.0), g(-0.04, 0.04);
   std::uniform_int_distribution<int> coin(0, 3);
   std::vector<Point3d> pos;
+  std::vector<OcKey> key;  // the voxel of each point (the ledger's, from its double position)
   std::vector<std::size_t> creator;
-  std::vector<bool> committed;
-  std::size_t commits = 0, waits = 0, early = 0, span_waits = 0, lone = 0;
+  std::vector<bool> committed, anchor;
+  std::size_t commits = 0, waits = 0, early = 0, span_waits = 0, lone = 0, near_seen = 0,
+              near_later = 0;
+  auto anchor_beside = [&](const OcKey& k, const std::vector<bool>& anchors) {
+    for (std::size_t o = 0; o < pos.size(); ++o)
+      if (anchors[o] && std::abs(int(key[o][0]) - int(k[0])) <= 1 &&
+          std::abs(int(key[o][1]) - int(k[1])) <= 1 && std::abs(int(key[o][2]) - int(k[2])) <= 1)
+        return true;
+    return false;
+  };
   for (std::size_t kf = 0; kf < 30; ++kf) {
     std::vector<Point3d> pts;
     std::vector<std::uint64_t> ids;
@@ -301,19 +353,21 @@ TEST_CASE("robust model in a Mapper: independent support against a brute-force c
       pts.push_back(p);
       ids.push_back(pos.size());
       pos.push_back(p);
+      OcKey k;
+      REQUIRE(grid.point_to_key(p, k));
+      key.push_back(k);
       creator.push_back(kf);
       committed.push_back(false);
+      anchor.push_back(false);
     }
     m.insert_keyframe(Point3d{0, 0, 0}, pts, ids);
-    const double r = 2.0 * m.tracker().mu();
+    const double r = params.support_scale * m.tracker().mu();
+    const std::vector<bool> anchors_before = anchor;
+    std::vector<bool> expect = committed;
     for (const std::uint64_t id : ids) {
       const auto* e = m.map_points().find(id);
       REQUIRE(e != nullptr);
-      const bool now = e->added != 0.0f;
-      if (committed[id]) {
-        CHECK(now);
-        continue;
-      }
+      if (anchor[id]) continue;
       std::uint32_t support = 0, siblings = 0;
       for (std::size_t o = 0; o < pos.size(); ++o) {
         const double dx = pos[o].x - pos[id].x, dy = pos[o].y - pos[id].y,
@@ -328,21 +382,46 @@ TEST_CASE("robust model in a Mapper: independent support against a brute-force c
       const bool waits_span = span < params.min_span && support < params.span_support && patch;
       const bool confirmed = (e->views >= params.min_views && supported) ||
                              (e->views >= params.early_views && support >= params.early_support);
-      const bool expect = confirmed && !waits_span;
-      early += e->views < params.min_views && expect;
+      OcKey k;  // the endpoint's voxel, as the scan sees it (float)
+      REQUIRE(grid.point_to_key(detail::to_point3f(pos[id]), k));
+      if (confirmed && !waits_span) {
+        anchor[id] = expect[id] = true;
+        early += e->views < params.min_views;
+        lone += support == 0;
+      } else if (params.near_views > 0 && e->views >= params.near_views &&
+                 anchor_beside(k, anchors_before)) {
+        near_seen += !expect[id];
+        expect[id] = true;
+      }
       span_waits += confirmed && waits_span;
-      lone += expect && support == 0;
-      CHECK(now == expect);
-      committed[id] = now;
-      commits += now;
       waits += e->views >= params.min_views && !supported;
     }
+    // points held back beside this keyframe's new anchors commit at its end
+    if (params.near_views > 0)
+      for (std::size_t o = 0; o < pos.size(); ++o)
+        if (!expect[o] && m.map_points().find(o)->views >= params.near_views &&
+            anchor_beside(key[o], anchor)) {
+          expect[o] = true;
+          ++near_later;
+        }
+    for (std::size_t o = 0; o < pos.size(); ++o) {
+      const auto* e = m.map_points().find(o);
+      REQUIRE(e != nullptr);
+      CHECK(e->anchor == anchor[o]);
+      CHECK((e->added != 0.0f) == expect[o]);
+      commits += expect[o] && !committed[o];
+    }
+    committed = expect;
   }
   CHECK(commits > 20);
   CHECK(waits > 5);
   CHECK(early > 0);
   CHECK(span_waits > 0);
   CHECK(lone > 0);
+  if (params.near_views > 0) {
+    CHECK(near_seen > 0);
+    CHECK(near_later > 0);
+  }
 }
 
 TEST_CASE("robust model without map-point ids maps as the OctoMap model") {

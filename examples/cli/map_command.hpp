@@ -95,10 +95,11 @@ before the summary: knn k K map_points N valid N mu X sigma X rays R of E median
   (--discretize does not apply to the k-NN model)
 robust model (--model robust, sensor/robust_model.hpp): an endpoint adds evidence only once its
 map point has been observed by --min-views keyframes (default 3) and another keyframe's map point
-lies within twice the mean k-NN distance, or by two keyframes and 12 such points lie there (the
+lies within 1.75 times the mean k-NN distance, or by two keyframes and 12 such points lie there (the
 keyframe that commits it also adds the deferred evidence); a patch (4 points of its own keyframe
-near it) waits for a keyframe 5 keyframes later unless 8 independent points surround it, a point
-that is not a patch, seen over 5 keyframes, needs no support; it casts its free ray from the
+near it) waits for a keyframe 5 keyframes later, a point that is not a patch, seen over 5
+keyframes, needs no support, and a point held back whose voxel touches one holding a point
+committed by those rules adds its evidence without a ray; it casts its free ray from the
 fourth view on; eq 13 floored at P_w (a confirmed point is never pushed towards free), one
 keyframe adds the mean of its endpoints in a voxel; without map-point ids it is OctoMap's model
 and keeps no map point cloud (the knn line then says map_points 0).

@@ -359,6 +359,7 @@ class Mapper {
     ratings_.resize(n);
     keys_.resize(n);
     key_ok_.assign(n, 0);
+    beside_.assign(n, 0);
     per_voxel_.clear();
     for (std::size_t j = 0; j < n; ++j)
       if (point_ids_[j] != KeyframeUnion::kNoId &&
@@ -388,13 +389,19 @@ class Mapper {
         c.views = e.views;
         c.contradictions = e.contra;
         c.committed = e.added != 0.0f;
+        c.anchor = e.anchor;
         c.parallax = MapPointLedger<Key>::parallax(e, world_[j], origin_);
         c.span = keyframe_ - e.first;
         if constexpr (detail::has_support<Model>::value) {
-          // Counted until the point commits evidence: the support decision is taken once.
-          const double r = c.committed ? 0.0 : model_.support_radius(c.views, dist);
+          // Counted until the point commits on its own: the support decision is taken once.
+          const double r = c.anchor ? 0.0 : model_.support_radius(c.views, dist);
           if (r > 0) c.support = count_support(id, e.first, r, c.siblings);
         }
+        if constexpr (detail::has_anchors<Model>::value)
+          if (key_ok_[j] && model_.wants_anchors(c)) {
+            c.anchors = ledger_.anchors_around(keys_[j]);
+            beside_[j] = 1;
+          }
       }
       ratings_[j] = model_.rate(c, dist);
       ++ks.rated;
@@ -423,14 +430,23 @@ class Mapper {
     return n;
   }
 
-  // After a contextual model's scan: the evidence each map point added, then the free-space
-  // evidence of this keyframe's rays against other map points (MapPointLedger).
+  // After a contextual model's scan: the evidence each map point added, the points held back
+  // beside this keyframe's new anchors, then the free-space evidence of this keyframe's rays
+  // against other map points (MapPointLedger).
   void settle_in_context() {
     if (!ids_given_) return;
+    new_anchors_.clear();
     for (std::size_t j = 0; j < world_.size(); ++j) {
       if (point_ids_[j] == KeyframeUnion::kNoId || ratings_[j].logodds == 0.0f) continue;
-      if (auto* e = ledger_.find(point_ids_[j])) e->added += ratings_[j].logodds;
+      if (auto* e = ledger_.find(point_ids_[j])) {
+        e->added += ratings_[j].logodds;
+        if (!e->anchor && !beside_[j]) {  // committed beside anchors: not one itself
+          e->anchor = true;
+          if (e->has_key) new_anchors_.push_back(e->key);
+        }
+      }
     }
+    if constexpr (detail::has_anchors<Model>::value) commit_beside(new_anchors_);
     if constexpr (detail::has_rejects<Model>::value)
       if (model_.contradiction_radius() > 0)
         ledger_.contradict(origin_, world_, ratings_, keyframe_, model_.contradiction_radius(),
@@ -438,6 +454,29 @@ class Mapper {
                            [&](std::uint32_t views, std::uint32_t contra) {
                              return model_.rejects(views, contra);
                            });
+  }
+
+  // Map points that the model held back before an anchor appeared beside them now add, to the
+  // voxel of their first position, what they add beside anchors (RobustModel::near_views): the
+  // evidence does not depend on whether the anchor or the point came first.
+  void commit_beside(const std::vector<Key>& anchors) {
+    const RunningNormal& dist = tracker_.distribution();
+    for (const Key& a : anchors)
+      ledger_.for_each_around(a, [&](std::uint64_t id, auto& p) {
+        if (p.added != 0.0f || p.anchor || p.rejected || !p.has_key) return;
+        PointContext c;
+        c.s = tracker_.contains(id) ? tracker_.s(id) : std::numeric_limits<double>::quiet_NaN();
+        c.views = p.views;
+        c.span = keyframe_ - p.first;
+        c.keyframe = keyframe_;
+        c.contradictions = p.contra;
+        if (const auto v = map_.logodds(p.key)) c.voxel_logodds = *v;
+        c.anchors = 1;
+        const float l = model_.beside_evidence(c, dist);
+        if (l == 0.0f) return;
+        map_.update(p.key, l);
+        p.added = l;
+      });
   }
 
   MapperOptions options_;
@@ -461,6 +500,8 @@ class Mapper {
   std::vector<EndpointRating> kept_ratings_;
   std::vector<Key> keys_;
   std::vector<unsigned char> key_ok_;
+  std::vector<unsigned char> beside_;  // rated from the anchors around it (wants_anchors)
+  std::vector<Key> new_anchors_;
   std::vector<std::uint32_t> near_;
   std::unordered_map<Key, std::uint32_t, KeyHash> per_voxel_;
 };

@@ -1,8 +1,9 @@
 #pragma once
 // MapPointLedger: what Mapper remembers per map-point id for a contextual sensor model
 // (sensor/sensor_model.hpp, RobustModel): how many keyframes observed the point, its first
-// viewing direction, the occupied log-odds it has added to its voxel, and how many other
-// keyframes' rays contradict it (free-space evidence against the point).
+// viewing direction, the occupied log-odds it has added to its voxel, whether it committed by the
+// model's own rules (an anchor: anchors_around), and how many other keyframes' rays contradict it
+// (free-space evidence against the point).
 //
 // A ray contradicts a map point when it crosses the point's voxel, passes within `radius` of the
 // point and ends more than `margin` beyond it: the keyframe saw through where the point should
@@ -44,6 +45,7 @@ class MapPointLedger {
     float dir[3] = {0, 0, 0};     ///< first viewing direction (unit)
     float added = 0.0f;           ///< occupied log-odds it added to its voxel so far
     bool rejected = false;        ///< its evidence was taken back
+    bool anchor = false;          ///< committed by the model's own rules (PointContext::anchor)
   };
 
   /// The point `id` observed by `keyframe` at `p` from `origin` (its first position is kept);
@@ -141,6 +143,33 @@ class MapPointLedger {
       p.added = 0.0f;
     }
     return rejected;
+  }
+
+  /// Calls f(id, point) for every point whose first position lies in `key`'s voxel or one of
+  /// the 26 around it.
+  template <class F>
+  void for_each_around(const Key& key, F&& f) {
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const std::int64_t x = std::int64_t{key[0]} + dx, y = std::int64_t{key[1]} + dy,
+                             z = std::int64_t{key[2]} + dz;
+          if (x < 0 || y < 0 || z < 0 || x >= Key::extent || y >= Key::extent || z >= Key::extent)
+            continue;
+          using I = typename Key::index_type;
+          const std::uint32_t cell =
+              cells_.find(Key(static_cast<I>(x), static_cast<I>(y), static_cast<I>(z)).pack());
+          if (cell == detail::FlatIndex::kNone) continue;
+          for (const std::uint32_t i : cell_points_[cell]) f(ids_[i], points_[i]);
+        }
+  }
+
+  /// Anchors (points with `anchor`, not rejected) whose first position lies in `key`'s voxel or
+  /// one of the 26 around it.
+  std::uint32_t anchors_around(const Key& key) {
+    std::uint32_t n = 0;
+    for_each_around(key, [&](std::uint64_t, const Point& p) { n += p.anchor && !p.rejected; });
+    return n;
   }
 
   const Point* find(std::uint64_t id) const {

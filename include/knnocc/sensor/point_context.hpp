@@ -27,6 +27,13 @@ struct PointContext {
   std::uint32_t contradictions = 0;
   /// The map point has added occupied evidence before this keyframe.
   bool committed = false;
+  /// The map point committed by the model's own rules for it before this keyframe (not only
+  /// beside other points: RobustModelParams::near_views); the same as `committed` for a model
+  /// without that rule.
+  bool anchor = false;
+  /// Anchors (map points with `anchor`) in the endpoint's voxel and the 26 around it; the
+  /// largest value when not counted (sensor_model.hpp: wants_anchors).
+  std::uint32_t anchors = std::numeric_limits<std::uint32_t>::max();
   /// Independent support: other map points within the model's support radius
   /// (sensor_model.hpp: support_radius) that a keyframe other than this point's creator (its
   /// first observer) created; the largest value when not counted (e.g. once committed).

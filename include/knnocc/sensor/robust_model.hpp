@@ -10,8 +10,8 @@
 //     (normally the one that brings it to min_views) adds what the earlier, deferred observations
 //     would have added (views times its own);
 //   - independent support at a second scale: a confirmed map point commits evidence only once at
-//     least min_support other map points within support_scale * mu (mu: the mean of the k-NN
-//     distances s) were created by keyframes other than its own creator; until then it is
+//     least min_support (1) other map points within support_scale (1.75) * mu (mu: the mean of
+//     the k-NN distances s) were created by keyframes other than its own creator; until then it is
 //     deferred like an unconfirmed one, and the count is taken again at each observation as the
 //     cloud grows. A wrong patch is a few points of one keyframe's stereo matching sharing one
 //     depth error, with nothing else near: s at the paper's k cannot tell it from sparse real
@@ -22,21 +22,32 @@
 //   - temporal consistency for patches: a confirmed map point with span_siblings (4) or more
 //     points of its own creator within the support radius (a patch of one keyframe's matching)
 //     commits only once a keyframe at least min_span (5) keyframes after its creator observes
-//     it, unless span_support (8) independent points surround it. A wrong patch that the SLAM
+//     it (span_support: an exemption for patches that many independent points surround, off by
+//     default: with the near rule below it gives back no real structure, and lets wrong patches
+//     among other wrong points through). A wrong patch that the SLAM
 //     system fails to cull is re-observed by the next few keyframes, then vanishes; real
 //     structure keeps being observed while in view. Applied to every point (not only patches)
 //     it costs the real stereo set many multi-view voxels: there 18 % of them hold only points
 //     seen within five consecutive keyframes (bench/diag_robust_model.cpp);
 //   - lone points: a map point that is not a patch, observed over lone_span (5) keyframes
 //     since its creator, commits without independent support (sparse real structure). Patches
-//     are left out: a wrong patch re-observed past lone_span keyframes would commit (with the
-//     simulator's patches re-observed by 8 keyframes instead of 4, 72 % of OctoMap's irrelevant
-//     nodes instead of 19 %), and the real stereo set gives the same map either way;
+//     are left out: a wrong patch re-observed past lone_span keyframes would commit
+//     (bench_robust_model --repeat 8), and the real stereo set gives the same map either way;
 //   - measured and not kept (diag_robust_model prints the geometry): the angle spread of a
 //     point's viewing rays, and support counted only from creators more than a few keyframes
 //     away. The real set's keyframes are close together: its multi-view points are seen under
-//     small angles (median spread 16 degrees, against 24-34 for the simulator's wrong patches)
+//     small angles (median spread 14 degrees, against 23-34 for the simulator's wrong patches)
 //     and supported by neighbouring keyframes' points, so both lose real structure there;
+//   - structure beside committed structure: a map point that the rules above hold back adds
+//     occupied evidence, but casts no ray, once its voxel or one of the 26 around it holds an
+//     anchor, a map point that committed by the rules above (when the point is observed with an
+//     anchor already there, or, without a new observation, at the end of the keyframe that made
+//     the anchor; points committed by this rule anchor nothing, so it never chains). Sparse
+//     real structure continues committed structure; a wrong match mostly lies off it. On the
+//     real stereo set the voxels that the rules above kept alone were mostly isolated because
+//     their neighbours' points were seen by one or two keyframes; this rule fills those in
+//     (fewer isolated and fewer lost multi-view voxels) and adds no irrelevant nodes in the
+//     simulator (bench_robust_model --ablate, "-near");
 //   - s: a confirmed endpoint's probability is eq 13's, but never below P_w (a point several
 //     keyframes agree on is not pushed towards free, however sparse its neighbourhood);
 //   - free rays from ray_views (4) views on: a map point three keyframes agree on adds occupied
@@ -94,7 +105,7 @@ struct RobustModelParams {
   /// Lowest probability of a confirmed endpoint (s part): P_w by default; 0.5 adds nothing
   double p_floor = -1;  ///< < 0: P_w
   /// Independent support at a second scale (see above; support_scale 0 or min_support 0: off).
-  double support_scale = 2.0;
+  double support_scale = 1.75;
   std::uint32_t min_support = 1;
   /// A map point with early_views (< min_views) views commits once early_support independent
   /// points surround it (early_views 0: off): real structure seen twice in a dense region.
@@ -103,9 +114,10 @@ struct RobustModelParams {
   /// Temporal consistency for patches (see above; min_span 0: off): a map point with at least
   /// span_siblings other points of its own creator within the support radius commits only once
   /// a keyframe at least min_span keyframes after its creator observes it, unless span_support
-  /// independent points surround it (span_siblings 0: the rule applies to every point).
+  /// independent points surround it (the largest value, the default: no such exemption;
+  /// span_siblings 0: the rule applies to every point).
   std::uint32_t min_span = 5;
-  std::uint32_t span_support = 8;
+  std::uint32_t span_support = std::numeric_limits<std::uint32_t>::max();
   std::uint32_t span_siblings = 4;
   /// A map point observed over at least lone_span keyframes since its creator commits without
   /// independent support (0: off).
@@ -114,6 +126,11 @@ struct RobustModelParams {
   /// past lone_span keyframes would otherwise commit without support; bench_robust_model
   /// --repeat 8).
   bool lone_patches = false;
+  /// Structure beside committed structure (0: off): a map point seen by at least near_views
+  /// keyframes that the rules above hold back adds its occupied evidence, without a ray, once
+  /// its voxel or one of the 26 around it holds an anchor, a map point that committed by those
+  /// rules (PointContext::anchors).
+  std::uint32_t near_views = 1;
 
   void validate() const {
     knn.validate();
@@ -158,6 +175,14 @@ class RobustModel {
   EndpointRating rate(const PointContext& c, const RunningNormal& dist) const {
     if (c.views == 0)  // no map-point ids: OctoMap's model (one hit per voxel and scan)
       return EndpointRating{c.in_voxel > 1 ? hit_ / static_cast<float>(c.in_voxel) : hit_, true};
+    if (commits(c)) return EndpointRating{evidence(c, dist), c.views >= ray_views_};
+    if (beside_anchor(c)) return EndpointRating{evidence(c, dist), false};
+    return EndpointRating{0.0f, false};
+  }
+
+  /// The endpoint commits by the rules of its own map point (multi-view, independent support,
+  /// early commitment, temporal consistency, lone points): its map point is then an anchor.
+  bool commits(const PointContext& c) const {
     const bool early = params_.early_views > 0 && c.views >= params_.early_views &&
                        c.support != std::numeric_limits<std::uint32_t>::max() &&
                        c.support >= params_.early_support;
@@ -168,11 +193,36 @@ class RobustModel {
         params_.lone_span > 0 && c.span >= params_.lone_span && (params_.lone_patches || !patch);
     if ((c.views < params_.min_views && !early) || rejects(c.views, c.contradictions) ||
         (c.support < params_.min_support && !lone))
-      return EndpointRating{0.0f, false};
+      return false;
     const bool surrounded =
         c.support != std::numeric_limits<std::uint32_t>::max() && c.support >= params_.span_support;
-    if (!c.committed && c.span < params_.min_span && !surrounded && patch)
-      return EndpointRating{0.0f, false};
+    return c.anchor || c.span >= params_.min_span || surrounded || !patch;
+  }
+
+  /// Mapper counts the anchors around the endpoint (PointContext::anchors) only when this says
+  /// they can decide: the near rule is on, the point has near_views views and does not commit
+  /// on its own.
+  bool wants_anchors(const PointContext& c) const {
+    return params_.near_views > 0 && c.views >= params_.near_views &&
+           !rejects(c.views, c.contradictions) && !commits(c);
+  }
+
+  /// What a point that the rules hold back adds beside an anchor that appeared after its last
+  /// observation (Mapper commits it then, without a ray); 0 when the near rule does not apply.
+  float beside_evidence(const PointContext& c, const RunningNormal& dist) const {
+    return beside_anchor(c) ? evidence(c, dist) : 0.0f;
+  }
+
+ private:
+  bool beside_anchor(const PointContext& c) const {
+    return params_.near_views > 0 && c.views >= params_.near_views && c.anchors > 0 &&
+           c.anchors != std::numeric_limits<std::uint32_t>::max() &&
+           !rejects(c.views, c.contradictions);
+  }
+
+  // The occupied log-odds of an endpoint that adds evidence: eq 13 floored at P_w, the deferred
+  // views added at the first commitment, free_veto, the voxel's mean (eq 15 bounded).
+  float evidence(const PointContext& c, const RunningNormal& dist) const {
     double l = hit_;
     if (params_.use_s) {
       const double p = knn_.probability(c.s, dist);
@@ -181,9 +231,10 @@ class RobustModel {
     if (params_.rerate && !c.committed) l *= c.views;
     if (c.voxel_logodds < params_.free_veto && c.views < params_.veto_views) l = 0.0;
     if (params_.bound_voxel && c.in_voxel > 1) l /= c.in_voxel;
-    return EndpointRating{static_cast<float>(l), c.views >= ray_views_};
+    return static_cast<float>(l);
   }
 
+ public:
   /// Free-space evidence outweighs the point's views (see RobustModelParams::contra_min).
   bool rejects(std::uint32_t views, std::uint32_t contradictions) const {
     return params_.contra_min > 0 && contradictions >= params_.contra_min &&

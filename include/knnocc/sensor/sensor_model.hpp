@@ -105,6 +105,22 @@ template <class M>
 struct has_support<M, std::void_t<decltype(double(std::declval<const M&>().support_radius(
                           1u, std::declval<const RunningNormal&>())))>> : std::true_type {};
 
+// Optional for a contextual model: commitment beside committed structure, with
+//   bool wants_anchors(const PointContext& point) const;
+//   float beside_evidence(const PointContext& point, const RunningNormal& dist) const;
+// (wants_anchors true: Mapper counts the anchors around the endpoint into
+// PointContext::anchors, and an endpoint that adds evidence after that does not make its map
+// point an anchor; beside_evidence: what a map point held back earlier adds when an anchor
+// appears beside it, MapPointLedger::for_each_around).
+template <class M, class = void>
+struct has_anchors : std::false_type {};
+template <class M>
+struct has_anchors<M, std::void_t<decltype(bool(std::declval<const M&>().wants_anchors(
+                                      std::declval<const PointContext&>()))),
+                                  decltype(float(std::declval<const M&>().beside_evidence(
+                                      std::declval<const PointContext&>(),
+                                      std::declval<const RunningNormal&>())))>> : std::true_type {};
+
 /// Compiles only for a type that meets the sensor-model concept; the message names what is
 /// missing.
 template <class M>

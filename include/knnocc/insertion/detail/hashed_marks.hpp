@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "../../core/detail/flat_index.hpp"
@@ -23,36 +24,45 @@ struct BrickMasks {
   VoxelMask hit, miss;
 };
 
-/// One thread's touched bricks (memory kept between scans).
+/// One thread's touched bricks (memory kept between scans), in blocks of kBlock: growing never
+/// copies the bricks already there, and never needs more than one new block at once.
 class HashedMarks {
  public:
-  std::size_t size() const { return used_; }
-  const BrickMasks& operator[](std::size_t i) const { return bricks_[i]; }
+  static constexpr std::size_t kBlockBits = 11, kBlock = std::size_t{1} << kBlockBits;
 
-  /// The brick `coord`, added with empty masks when new. References stay valid until the next
-  /// brick is added.
+  std::size_t size() const { return used_; }
+  const BrickMasks& operator[](std::size_t i) const { return brick(i); }
+
+  /// The brick `coord`, added with empty masks when new. References stay valid until clear().
   BrickMasks& at(std::uint64_t coord) {
-    if (last_ != FlatIndex::kNone && coord == last_coord_) return bricks_[last_];
-    if (cap_ && memory_usage() + growth_bytes() > cap_ && index_.find(coord) == FlatIndex::kNone)
-      memory_limit_exceeded(limit_, elsewhere_ + memory_usage() + growth_bytes());
+    if (last_ != FlatIndex::kNone && coord == last_coord_) return brick(last_);
+    if (cap_ && memory_usage() + growth_bytes() > cap_) {  // no room to grow: found, or refused
+      const std::uint32_t i = index_.find(coord);
+      if (i == FlatIndex::kNone)
+        memory_limit_exceeded(limit_, elsewhere_ + memory_usage() + growth_bytes());
+      last_ = i;
+      last_coord_ = coord;
+      return brick(i);
+    }
     bool inserted = false;
     last_ = index_.find_or_insert(coord, static_cast<std::uint32_t>(used_), inserted);
     last_coord_ = coord;
     if (inserted) {
-      if (used_ == bricks_.size()) bricks_.emplace_back();
-      BrickMasks& b = bricks_[used_++];
+      if (used_ == blocks_.size() * kBlock)
+        blocks_.push_back(std::make_unique<BrickMasks[]>(kBlock));
+      BrickMasks& b = brick(used_++);
       b.coord = coord;
       b.hit.clear();
       b.miss.clear();
     }
-    return bricks_[last_];
+    return brick(last_);
   }
   /// ORs other's miss masks into this scratch's bricks.
   void merge_misses(const HashedMarks& other) {
     for (std::size_t j = 0; j < other.used_; ++j) {
-      BrickMasks& into = at(other.bricks_[j].coord);
-      for (std::size_t i = 0; i < into.miss.w.size(); ++i)
-        into.miss.w[i] |= other.bricks_[j].miss.w[i];
+      const BrickMasks& from = other.brick(j);
+      BrickMasks& into = at(from.coord);
+      for (std::size_t i = 0; i < into.miss.w.size(); ++i) into.miss.w[i] |= from.miss.w[i];
     }
   }
   void clear() {
@@ -63,7 +73,8 @@ class HashedMarks {
 
   /// Bytes held (kept between scans).
   std::size_t memory_usage() const {
-    return bricks_.capacity() * sizeof(BrickMasks) + index_.memory_usage();
+    return blocks_.size() * kBlock * sizeof(BrickMasks) + blocks_.capacity() * sizeof(blocks_[0]) +
+           index_.memory_usage();
   }
   /// Caps memory_usage() at `cap` bytes (0: no cap): adding a brick that would pass it reports
   /// MemoryLimitError(limit, needed), needed being `elsewhere` (the memory counted against the
@@ -75,16 +86,24 @@ class HashedMarks {
   }
 
  private:
+  BrickMasks& brick(std::size_t i) { return blocks_[i >> kBlockBits][i & (kBlock - 1)]; }
+  const BrickMasks& brick(std::size_t i) const {
+    return blocks_[i >> kBlockBits][i & (kBlock - 1)];
+  }
+
   // How much memory_usage() grows when the next new brick is added.
   std::size_t growth_bytes() const {
     std::size_t grow = index_.growth_bytes(index_.size() + 1);
-    if (used_ == bricks_.size() && bricks_.size() == bricks_.capacity())
-      grow += std::max<std::size_t>(bricks_.capacity(), 1) * sizeof(BrickMasks);
+    if (used_ == blocks_.size() * kBlock) {
+      grow += kBlock * sizeof(BrickMasks);
+      if (blocks_.size() == blocks_.capacity())
+        grow += std::max<std::size_t>(blocks_.capacity(), 1) * sizeof(blocks_[0]);
+    }
     return grow;
   }
 
-  FlatIndex index_;  // brick coordinate -> index in bricks_
-  std::vector<BrickMasks> bricks_;
+  FlatIndex index_;  // brick coordinate -> index in the blocks
+  std::vector<std::unique_ptr<BrickMasks[]>> blocks_;
   std::size_t used_ = 0;
   std::uint64_t last_coord_ = 0;
   std::uint32_t last_ = FlatIndex::kNone;

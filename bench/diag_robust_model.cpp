@@ -158,10 +158,10 @@ void simulator(int seeds, const RobustModelParams& params, const char* label) {
           ++wrong_pts;
           // its supporters within the support radius created by another keyframe
           bool any_real = false, any = false;
+          const double r = params.support_scale * mu;
           for (const auto& [id2, t2] : tracks) {
             if (id2 == id || t2.kf[0] == t.kf[0]) continue;
             const double dx = t2.pos.x - t.pos.x, dy = t2.pos.y - t.pos.y, dz = t2.pos.z - t.pos.z;
-            const double r = params.support_scale * mu;
             if (dx * dx + dy * dy + dz * dz > r * r) continue;
             any = true;
             any_real |= id2 < sim::TreeScene::kOutlierIdBase;

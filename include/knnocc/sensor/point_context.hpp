@@ -36,7 +36,7 @@ struct PointContext {
   std::uint32_t anchors = std::numeric_limits<std::uint32_t>::max();
   /// Independent support: other map points within the model's support radius
   /// (sensor_model.hpp: support_radius) that a keyframe other than this point's creator (its
-  /// first observer) created; the largest value when not counted (e.g. once committed).
+  /// first observer) created; the largest value when not counted (e.g. once an anchor).
   std::uint32_t support = std::numeric_limits<std::uint32_t>::max();
   /// The other map points within the same radius that its own creator created (counted with
   /// support; the largest value when not counted).

@@ -219,12 +219,8 @@ void real_set(const std::string& dir) {
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
-          if (!dx && !dy && !dz) continue;
-          OcKey n = k;
-          n[0] = static_cast<OcKey::index_type>(k[0] + dx);
-          n[1] = static_cast<OcKey::index_type>(k[1] + dy);
-          n[2] = static_cast<OcKey::index_type>(k[2] + dz);
-          if (occ(m, n)) return false;
+          OcKey n;
+          if ((dx || dy || dz) && shifted_key(k, dx, dy, dz, n) && occ(m, n)) return false;
         }
     return true;
   };
@@ -263,11 +259,8 @@ void real_set(const std::string& dir) {
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
-          OcKey n = k;
-          n[0] = static_cast<OcKey::index_type>(k[0] + dx);
-          n[1] = static_cast<OcKey::index_type>(k[1] + dy);
-          n[2] = static_cast<OcKey::index_type>(k[2] + dz);
-          nl |= lost.count(n) > 0;
+          OcKey n;
+          nl |= shifted_key(k, dx, dy, dz, n) && lost.count(n) > 0;
         }
     iso_nbr_lost += nl;
     for (auto id : *vec) {

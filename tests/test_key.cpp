@@ -28,6 +28,20 @@ TEST_CASE("keys.pack_roundtrip_and_order") {
   }
 }
 
+TEST_CASE("keys.shifted_key_stays_in_the_key_range") {
+  OcKey n;
+  REQUIRE(knnocc::shifted_key(OcKey(10, 20, 30), -1, 0, 1, n));
+  CHECK(n == OcKey(9, 20, 31));
+  const std::uint16_t top = static_cast<std::uint16_t>(OcKey::extent - 1);
+  CHECK(knnocc::shifted_key(OcKey(0, top, 5), 0, 0, -1, n));
+  CHECK(n == OcKey(0, top, 4));
+  CHECK_FALSE(knnocc::shifted_key(OcKey(0, 5, 5), -1, 0, 0, n));   // below index 0
+  CHECK_FALSE(knnocc::shifted_key(OcKey(5, top, 5), 0, 1, 0, n));  // past the last index
+  WideKey w;
+  CHECK(knnocc::shifted_key(WideKey(1u << 20, 0, 7), 1, 1, -7, w));  // wider than 16 bits
+  CHECK(w == WideKey((1u << 20) + 1, 1, 0));
+}
+
 TEST_CASE("keys.coarse_depth") {
   Grid<OcKey> g(0.1);
   const OcKey k(32768 + 5, 32768 - 3, 32768);

@@ -46,6 +46,19 @@ struct BasicKey {
   friend constexpr bool operator<(const BasicKey& a, const BasicKey& b) { return a.k < b.k; }
 };
 
+/// `k` moved by (dx, dy, dz) voxels, into `out`; false (`out` unspecified) when that leaves the
+/// key range (a neighbour across the map's edge).
+template <int Bits>
+constexpr bool shifted_key(const BasicKey<Bits>& k, int dx, int dy, int dz, BasicKey<Bits>& out) {
+  const int d[3] = {dx, dy, dz};
+  for (int a = 0; a < 3; ++a) {
+    const std::int64_t c = std::int64_t{k[a]} + d[a];
+    if (c < 0 || c >= BasicKey<Bits>::extent) return false;
+    out[a] = static_cast<typename BasicKey<Bits>::index_type>(c);
+  }
+  return true;
+}
+
 using OcKey = BasicKey<16>;    ///< OctoMap-compatible key (OcTreeKey)
 using WideKey = BasicKey<21>;  ///< wide key for maps beyond ±3.2 km at 0.1 m
 

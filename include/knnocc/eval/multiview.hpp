@@ -141,15 +141,6 @@ MultiviewMetrics evaluate_multiview(
   const double r = g.resolution();
   const int reach = static_cast<int>(std::ceil(opt.far / r));
   const double far2 = opt.far * opt.far;
-  auto shifted = [](const Key& k, int dx, int dy, int dz, Key& out) {
-    const int d[3] = {dx, dy, dz};
-    for (int a = 0; a < 3; ++a) {
-      const long long c = static_cast<long long>(k[a]) + d[a];
-      if (c < 0 || c >= static_cast<long long>(Key::extent)) return false;
-      out[a] = static_cast<typename Key::index_type>(c);
-    }
-    return true;
-  };
   map.for_each_voxel([&](const Key& k, float v) {
     if (!map.is_occupied(v)) return;
     ++m.occupied;
@@ -158,7 +149,7 @@ MultiviewMetrics evaluate_multiview(
       for (int dy = -1; dy <= 1 && !neighbour; ++dy)
         for (int dz = -1; dz <= 1 && !neighbour; ++dz) {
           Key n;
-          if ((dx || dy || dz) && shifted(k, dx, dy, dz, n)) neighbour = occupied_in(map, n);
+          if ((dx || dy || dz) && shifted_key(k, dx, dy, dz, n)) neighbour = occupied_in(map, n);
         }
     m.isolated += !neighbour;
     bool near = false;
@@ -167,7 +158,7 @@ MultiviewMetrics evaluate_multiview(
         for (int dz = -reach; dz <= reach && !near; ++dz) {
           Key n;
           if (double(dx * dx + dy * dy + dz * dz) * r * r > far2 * (1 + 1e-9)) continue;
-          if (shifted(k, dx, dy, dz, n)) near = mv_set.count(n) > 0;
+          if (shifted_key(k, dx, dy, dz, n)) near = mv_set.count(n) > 0;
         }
     m.far += !near;
   });

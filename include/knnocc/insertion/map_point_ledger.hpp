@@ -152,13 +152,9 @@ class MapPointLedger {
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
-          const std::int64_t x = std::int64_t{key[0]} + dx, y = std::int64_t{key[1]} + dy,
-                             z = std::int64_t{key[2]} + dz;
-          if (x < 0 || y < 0 || z < 0 || x >= Key::extent || y >= Key::extent || z >= Key::extent)
-            continue;
-          using I = typename Key::index_type;
-          const std::uint32_t cell =
-              cells_.find(Key(static_cast<I>(x), static_cast<I>(y), static_cast<I>(z)).pack());
+          Key n;
+          if (!shifted_key(key, dx, dy, dz, n)) continue;
+          const std::uint32_t cell = cells_.find(n.pack());
           if (cell == detail::FlatIndex::kNone) continue;
           for (const std::uint32_t i : cell_points_[cell]) f(ids_[i], points_[i]);
         }

@@ -226,6 +226,14 @@ TEST_CASE("insert_threads.sparse_rays_leave_uniform_bricks") {
     std::size_t uniform = 0;
     for (const auto& b : map.bricks()) uniform += b.values == nullptr && b.known.any();
     CHECK(uniform > map.num_bricks() / 2);
+    if (limit == 0) {
+      // The hashed scratch is applied in place: 8 bytes per touched brick (its order and map
+      // slot, vectors at most twice their size) beside it, no 144-byte record per brick.
+      const auto used = inserter.scratch_usage();
+      REQUIRE(used.hashed > 0);
+      CHECK(used.brick_groups > 0);
+      CHECK(used.brick_groups <= 4 * sizeof(std::uint32_t) * map.num_bricks());
+    }
     for (const std::uint64_t coord : solid) {
       const auto* b = map.find_brick(coord);
       REQUIRE(b != nullptr);

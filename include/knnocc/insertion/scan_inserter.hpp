@@ -30,8 +30,9 @@
 //      this bounds the per-point buffers. With one thread, a scan with few points for its box
 //      keeps its hits as 4-byte codes instead of a hit bitmap (detail/hit_codes.hpp).
 //   3. apply (detail/brick_updates.hpp): the touched bricks with the thread scratches OR-ed,
-//      gathered in z, y, x brick order whatever the path or thread count; the missing map bricks
-//      created in that order (one thread), then every touched voxel updated exactly once,
+//      taken in z, y, x brick order whatever the path or thread count (the dense scratch gathered
+//      into records, the hashed scratch read in place through a sorted index); the missing map
+//      bricks created in that order (one thread), then every touched voxel updated exactly once,
 //      occupied first (each brick by one thread); a rated scan's endpoint voxels then get their
 //      sums (eq 15, detail/rated_sums.hpp). One thread with no map memory limit takes the dense
 //      scratch brick row by brick row and updates each touched brick as it is found, in the same
@@ -134,7 +135,8 @@ class ScanInserter {
       u.other += (s.row_hit.capacity() + s.row_miss.capacity()) * sizeof(VoxelMask) +
                  s.hit_codes.memory_usage() + s.row_any.capacity() * sizeof(std::uint64_t);
     }
-    u.brick_groups = bricks_.memory_usage() + order_.capacity() * sizeof(std::uint32_t);
+    u.brick_groups =
+        bricks_.memory_usage() + (order_.capacity() + slots_.capacity()) * sizeof(std::uint32_t);
     u.other += first_chunk_.capacity() * sizeof(std::size_t) +
                endpoints_.capacity() * sizeof(std::uint64_t) + sums_.capacity() * sizeof(sums_[0]);
     return u;
@@ -289,20 +291,26 @@ class ScanInserter {
       return;
     }
     // The threads' hashed scratch shares the room the map leaves under its limit.
-    const std::size_t elsewhere =
-        in_map + bricks_.memory_usage() + order_.capacity() * sizeof(std::uint32_t);
+    const std::size_t elsewhere = in_map + bricks_.memory_usage() +
+                                  (order_.capacity() + slots_.capacity()) * sizeof(std::uint32_t);
     if (limit && elsewhere >= limit) detail::memory_limit_exceeded(limit, elsewhere);
     for (unsigned t = 0; t < threads(); ++t)
       scratch(t).hashed.set_cap(limit ? (limit - elsewhere) / threads() : 0, limit, elsewhere);
     walk_hashed(o, rays);
     add_visits(st);
-    detail::gather_hashed<Key>(scratch_, threads(), order_, bricks_, limit, in_map);
-    apply(values, st);
+    detail::order_hashed<Key>(scratch_, threads(), order_, slots_, limit, in_map);
+    const ScratchCounted counted(*map_, apply_scratch_bytes());
+    add_updates(
+        detail::apply_updates(*map_, detail::HashedUpdates{scratch(0).hashed, order_, slots_},
+                              values, team_, scratch_),
+        values, st);
+    scratch(0).hashed.clear();
   }
 
-  // The inserter's own memory held through the apply (hashed scratch, brick groups, order).
+  // The inserter's own memory held through the apply (hashed scratch, brick groups, order, slots).
   std::size_t apply_scratch_bytes() const {
-    std::size_t bytes = bricks_.memory_usage() + order_.capacity() * sizeof(std::uint32_t);
+    std::size_t bytes =
+        bricks_.memory_usage() + (order_.capacity() + slots_.capacity()) * sizeof(std::uint32_t);
     for (unsigned t = 0; t < threads(); ++t) bytes += scratch_[t]->hashed.memory_usage();
     return bytes;
   }
@@ -394,7 +402,9 @@ class ScanInserter {
 
   void apply(const detail::ScanValues& values, ScanStats& st) {
     const ScratchCounted counted(*map_, apply_scratch_bytes());
-    add_updates(detail::apply_updates(*map_, bricks_, values, team_, scratch_), values, st);
+    add_updates(
+        detail::apply_updates(*map_, detail::GroupedUpdates{bricks_}, values, team_, scratch_),
+        values, st);
   }
   // The dense scratch into the map: with one thread and no memory limit brick row by brick row,
   // without the touched bricks' records (the limit refuses a scan's bricks before any is made).
@@ -536,6 +546,7 @@ class ScanInserter {
   std::vector<std::uint64_t> endpoints_;  // collect, discretize: distinct endpoint keys
   detail::BrickGroups bricks_;            // apply: touched bricks, z, y, x order overall
   std::vector<std::uint32_t> order_;      // apply, hashed path: bricks in z, y, x order
+  std::vector<std::uint32_t> slots_;      // apply, hashed path: their map slots
   std::vector<detail::RatedHit> sums_;    // apply, rated scans: the endpoints sorted by key
 };
 

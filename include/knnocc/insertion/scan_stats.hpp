@@ -37,7 +37,7 @@ struct ScratchUsage {
       0;                       ///< collect: rays and hits of the points (or of a chunk), hit codes
   std::size_t ray_blocks = 0;  ///< walk: rays set up for the bundled walk
   std::size_t hashed = 0;      ///< walk, hashed scratch: masks of the touched bricks
-  std::size_t brick_groups = 0;  ///< apply: touched bricks with their masks, and their order
+  std::size_t brick_groups = 0;  ///< apply: dense path's brick records; hashed order, slots
   std::size_t other = 0;         ///< apply rows, rated sums, discretized keys, chunk sums
 
   std::size_t total() const {

@@ -1,11 +1,13 @@
 #pragma once
 // Phase 3 of a scan (ScanInserter): apply. The touched bricks with their hit and miss masks (the
-// threads' scratches OR-ed) are gathered in groups whose concatenation is z, y, x brick order,
+// threads' scratches OR-ed) are taken in groups whose concatenation is z, y, x brick order,
 // whatever the path or the thread count; the missing map bricks are created in that order by one
 // thread (the map's storage order never depends on the path or the thread count); then every
 // touched voxel gets exactly one update, occupied first (occupied wins), each brick by one thread.
-// With one thread and no map memory limit, apply_dense_serial does both steps brick row by brick
-// row from the dense scratch, keeping no record per touched brick.
+// The dense scratch is gathered into records (BrickGroups); the hashed scratch is read in place
+// through its z, y, x order (HashedUpdates). With one thread and no map memory limit,
+// apply_dense_serial does both steps brick row by brick row from the dense scratch, keeping no
+// record per touched brick.
 
 #include <algorithm>
 #include <array>
@@ -50,6 +52,39 @@ struct BrickGroups {
     std::size_t bytes = groups.capacity() * sizeof(groups[0]);
     for (const auto& g : groups) bytes += g.capacity() * sizeof(BrickUpdate);
     return bytes;
+  }
+};
+
+/// How apply_updates walks a scan's touched bricks: groups() groups whose concatenation is in
+/// z, y, x order, each(g, f) calling f(coord, slot, hit, miss) for group g's bricks (the slot and
+/// masks writable). GroupedUpdates reads BrickGroups' records.
+struct GroupedUpdates {
+  BrickGroups& bricks;
+  std::size_t size() const { return bricks.bricks(); }
+  std::size_t groups() const { return bricks.count; }
+  template <class F>
+  void each(std::size_t g, F&& f) const {
+    for (BrickUpdate& u : bricks.groups[g]) f(u.coord, u.slot, u.hit, u.miss);
+  }
+};
+
+/// The hashed scratch read in place: `order` lists its bricks in z, y, x order (order_hashed), in
+/// groups of 256, and `slots` gets their map slots. 8 bytes per touched brick instead of a
+/// 144-byte record: far rays touch tens of millions of bricks.
+struct HashedUpdates {
+  static constexpr std::size_t kGroup = 256;
+  HashedMarks& marks;
+  const std::vector<std::uint32_t>& order;
+  std::vector<std::uint32_t>& slots;
+  std::size_t size() const { return order.size(); }
+  std::size_t groups() const { return (order.size() + kGroup - 1) / kGroup; }
+  template <class F>
+  void each(std::size_t g, F&& f) const {
+    const std::size_t end = std::min(order.size(), (g + 1) * kGroup);
+    for (std::size_t k = g * kGroup; k < end; ++k) {
+      BrickMasks& b = marks[order[k]];
+      f(b.coord, slots[k], b.hit, b.miss);
+    }
   }
 };
 
@@ -212,19 +247,22 @@ UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const 
   return c;
 }
 
-/// Gathers the hashed scratch into `out` (groups of 256 bricks in z, y, x order), leaving every
-/// scratch empty: the other threads' miss masks are OR-ed into the first thread's, whose bricks
-/// hold the hits. `order` is scratch. With a memory limit (`limit` > 0; `elsewhere`: the bytes
-/// counted against it outside the threads' hashed scratch, `order` and `out`) the first thread's
-/// scratch may grow to what the others leave, and the groups are refused (MemoryLimitError)
-/// before they are made when they would pass it.
+/// Orders the hashed scratch for HashedUpdates: the other threads' miss masks are OR-ed into the
+/// first thread's, whose bricks hold the hits (the others are left empty), and `order` lists the
+/// first thread's bricks in z, y, x order; `slots` gets room for their map slots. The first
+/// thread's scratch keeps its bricks until the apply has read them. With a memory limit (`limit`
+/// > 0; `elsewhere`: the bytes counted against it outside the threads' hashed scratch, `order`
+/// and `slots`) the first thread's scratch may grow to what the others leave, and `order` and
+/// `slots` are refused (MemoryLimitError) before they grow past it.
 template <class Key>
-void gather_hashed(ThreadScratches& scratch, unsigned threads, std::vector<std::uint32_t>& order,
-                   BrickGroups& out, std::size_t limit = 0, std::size_t elsewhere = 0) {
+void order_hashed(ThreadScratches& scratch, unsigned threads, std::vector<std::uint32_t>& order,
+                  std::vector<std::uint32_t>& slots, std::size_t limit = 0,
+                  std::size_t elsewhere = 0) {
   using layout = BrickLayout<Key>;
   HashedMarks& first = scratch[0]->hashed;
+  const auto lists = [&] { return (order.capacity() + slots.capacity()) * sizeof(std::uint32_t); };
   if (limit) {
-    std::size_t held = elsewhere + order.capacity() * sizeof(std::uint32_t) + out.memory_usage();
+    std::size_t held = elsewhere + lists();
     for (unsigned t = 1; t < threads; ++t) held += scratch[t]->hashed.memory_usage();
     first.set_cap(limit > held ? limit - held : 1, limit, held);
   }
@@ -232,29 +270,24 @@ void gather_hashed(ThreadScratches& scratch, unsigned threads, std::vector<std::
     first.merge_misses(scratch[t]->hashed);
     scratch[t]->hashed.clear();
   }
-  if (limit) {  // the groups and the order: what they add to what is held
-    std::size_t held = elsewhere + out.memory_usage();
+  const std::size_t n = first.size();
+  if (limit) {  // what the two lists add to what is held
+    std::size_t held = elsewhere + lists();
     for (unsigned t = 0; t < threads; ++t) held += scratch[t]->hashed.memory_usage();
-    const std::size_t n = first.size();
-    std::size_t more = n * sizeof(BrickUpdate);
-    if (order.capacity() < n) more += 2 * n * sizeof(std::uint32_t);
+    std::size_t more = 0;
+    if (order.capacity() < n) more += n * sizeof(std::uint32_t);
+    if (slots.capacity() < n) more += n * sizeof(std::uint32_t);
     if (held + more > limit) memory_limit_exceeded(limit, held + more);
   }
   order.clear();
-  for (std::size_t j = 0; j < first.size(); ++j) order.push_back(static_cast<std::uint32_t>(j));
+  for (std::size_t j = 0; j < n; ++j) order.push_back(static_cast<std::uint32_t>(j));
   auto zyx = [&](std::uint32_t j) {
     const auto o = layout::origin_of(first[j].coord);
     return std::array<std::int64_t, 3>{o[2], o[1], o[0]};
   };
   std::sort(order.begin(), order.end(),
             [&](std::uint32_t a, std::uint32_t b) { return zyx(a) < zyx(b); });
-  constexpr std::size_t kGroup = 256;
-  out.start((order.size() + kGroup - 1) / kGroup);
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    const BrickMasks& b = first[order[k]];
-    out.groups[k / kGroup].push_back({b.coord, 0, b.hit, b.miss});
-  }
-  first.clear();
+  slots.resize(n);
 }
 
 /// Creates the missing map bricks in group order (serially: the map's value pool is serial), then
@@ -263,49 +296,53 @@ void gather_hashed(ThreadScratches& scratch, unsigned threads, std::vector<std::
 /// turn. A brick gets its value array in the serial part unless it has no known voxel and this
 /// scan gives it one non-empty mask (only hits or only misses): update_brick then leaves it
 /// uniform, without an array (sparse long rays), touching nothing but the brick. Returns the
-/// voxels updated (occupied: hit updates, not counting rated ones; free: miss updates).
-template <class Key>
-UpdateCounts apply_updates(OccupancyMap<Key>& map, BrickGroups& bricks, const ScanValues& values,
+/// voxels updated (occupied: hit updates, not counting rated ones; free: miss updates). `bricks`:
+/// GroupedUpdates or HashedUpdates.
+template <class Key, class Updates>
+UpdateCounts apply_updates(OccupancyMap<Key>& map, const Updates& bricks, const ScanValues& values,
                            Team& team, ThreadScratches& scratch) {
-  if (map.num_bricks() == 0) map.reserve_bricks(bricks.bricks());  // a fresh map: all are new
-  const bool hits_here = !values.rated;  // rated hits carry their own sums
-  for (std::size_t g = 0; g < bricks.count; ++g)
-    for (BrickUpdate& u : bricks.groups[g]) {
-      u.slot = map.brick_slot(u.coord);
-      for (std::size_t i = 0; i < u.miss.w.size(); ++i) u.miss.w[i] &= ~u.hit.w[i];  // hit wins
-      auto& brick = map.brick_at(u.slot);
-      const int masks = int(hits_here && u.hit.any()) + int(u.miss.any());
-      if (masks > 1 || brick.known.any() || map.change_detection_enabled())
-        map.prepare_values(brick);
-    }
+  if (map.num_bricks() == 0) map.reserve_bricks(bricks.size());  // a fresh map: all are new
+  const bool hits_here = !values.rated;                          // rated hits carry their own sums
+  const bool records = map.change_detection_enabled();
+  for (std::size_t g = 0; g < bricks.groups(); ++g)
+    bricks.each(
+        g, [&](std::uint64_t coord, std::uint32_t& slot, const VoxelMask& hit, VoxelMask& miss) {
+          slot = map.brick_slot(coord);
+          for (std::size_t i = 0; i < miss.w.size(); ++i) miss.w[i] &= ~hit.w[i];  // hit wins
+          auto& brick = map.brick_at(slot);
+          const int masks = int(hits_here && hit.any()) + int(miss.any());
+          if (masks > 1 || brick.known.any() || records) map.prepare_values(brick);
+        });
   UpdateCounts total;
-  if (map.change_detection_enabled()) {  // records per voxel, in one thread
-    for (std::size_t g = 0; g < bricks.count; ++g)
-      for (const BrickUpdate& u : bricks.groups[g]) {
-        auto& brick = map.brick_at(u.slot);
-        if (hits_here) {
-          map.update_masked(brick, u.hit, values.hit);
-          total.occupied += static_cast<std::size_t>(u.hit.count());
-        }
-        map.update_masked(brick, u.miss, values.miss);
-        total.free += static_cast<std::size_t>(u.miss.count());
-      }
+  if (records) {  // records per voxel, in one thread
+    for (std::size_t g = 0; g < bricks.groups(); ++g)
+      bricks.each(
+          g, [&](std::uint64_t, std::uint32_t slot, const VoxelMask& hit, const VoxelMask& miss) {
+            auto& brick = map.brick_at(slot);
+            if (hits_here) {
+              map.update_masked(brick, hit, values.hit);
+              total.occupied += static_cast<std::size_t>(hit.count());
+            }
+            map.update_masked(brick, miss, values.miss);
+            total.free += static_cast<std::size_t>(miss.count());
+          });
     return total;
   }
-  WorkQueue queue(bricks.count);
+  WorkQueue queue(bricks.groups());
   auto update = [&](unsigned w) {
     UpdateCounts& c = scratch[w]->counts;
     c = UpdateCounts{};
     for (std::size_t g; queue.take(g);)
-      for (const BrickUpdate& u : bricks.groups[g]) {
-        auto& brick = map.brick_at(u.slot);
-        if (hits_here) {
-          c.added += map.update_brick(brick, u.hit, values.hit);
-          c.occupied += static_cast<std::size_t>(u.hit.count());
-        }
-        c.added += map.update_brick(brick, u.miss, values.miss);
-        c.free += static_cast<std::size_t>(u.miss.count());
-      }
+      bricks.each(
+          g, [&](std::uint64_t, std::uint32_t slot, const VoxelMask& hit, const VoxelMask& miss) {
+            auto& brick = map.brick_at(slot);
+            if (hits_here) {
+              c.added += map.update_brick(brick, hit, values.hit);
+              c.occupied += static_cast<std::size_t>(hit.count());
+            }
+            c.added += map.update_brick(brick, miss, values.miss);
+            c.free += static_cast<std::size_t>(miss.count());
+          });
   };
   team.run(update);
   for (unsigned t = 0; t < team.size(); ++t) {

@@ -32,6 +32,7 @@ class HashedMarks {
 
   std::size_t size() const { return used_; }
   const BrickMasks& operator[](std::size_t i) const { return brick(i); }
+  BrickMasks& operator[](std::size_t i) { return brick(i); }
 
   /// The brick `coord`, added with empty masks when new. References stay valid until clear().
   BrickMasks& at(std::uint64_t coord) {

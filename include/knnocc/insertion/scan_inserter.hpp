@@ -296,6 +296,11 @@ class ScanInserter {
     if (limit && elsewhere >= limit) detail::memory_limit_exceeded(limit, elsewhere);
     for (unsigned t = 0; t < threads(); ++t)
       scratch(t).hashed.set_cap(limit ? (limit - elsewhere) / threads() : 0, limit, elsewhere);
+    // Under a limit the first thread's scratch, which ends up holding every touched brick, also
+    // counts the map bricks they will add: a scan too big for the limit stops sooner.
+    scratch(0).hashed.count_map_bricks(limit ? &map_->brick_index() : nullptr,
+                                       sizeof(typename map_type::Brick),
+                                       map_->bricks().capacity() - map_->num_bricks());
     walk_hashed(o, rays);
     add_visits(st);
     detail::order_hashed<Key>(scratch_, threads(), order_, slots_, limit, in_map);
@@ -380,7 +385,7 @@ class ScanInserter {
     for (unsigned t = 0; t < threads(); ++t)
       for (const std::uint64_t packed : scratch(t).part.hits) {
         const Key k = Key::unpack(packed);
-        first.at(layout::brick_of(k)).hit.set(layout::local_of(k));
+        first.set_hit(layout::brick_of(k), layout::local_of(k));
       }
     auto job = [&](unsigned t) {
       detail::HashedMissMarks<Key> visit{scratch(t).hashed};

@@ -458,6 +458,8 @@ class OccupancyMap {
       b.uniform = src->uniform;
     }
   }
+  /// The brick index (packed brick coordinate -> slot): which bricks exist, for a scan's scratch.
+  const detail::FlatIndex& brick_index() const { return index_; }
   const Brick* find_brick(std::uint64_t coord) const {
     const std::uint32_t slot = index_.find(coord);
     return slot == detail::FlatIndex::kNone ? nullptr : &bricks_[slot];

@@ -81,9 +81,11 @@ struct HashedUpdates {
   template <class F>
   void each(std::size_t g, F&& f) const {
     const std::size_t end = std::min(order.size(), (g + 1) * kGroup);
+    static const VoxelMask no_hits{};
     for (std::size_t k = g * kGroup; k < end; ++k) {
       BrickMasks& b = marks[order[k]];
-      f(b.coord, slots[k], b.hit, b.miss);
+      const VoxelMask* hit = marks.hit_of(order[k]);
+      f(b.coord, slots[k], hit ? *hit : no_hits, b.miss);
     }
   }
 };

@@ -135,8 +135,7 @@ class ScanInserter {
       u.other += (s.row_hit.capacity() + s.row_miss.capacity()) * sizeof(VoxelMask) +
                  s.hit_codes.memory_usage() + s.row_any.capacity() * sizeof(std::uint64_t);
     }
-    u.brick_groups =
-        bricks_.memory_usage() + (order_.capacity() + slots_.capacity()) * sizeof(std::uint32_t);
+    u.brick_groups = apply_lists_bytes();
     u.other += first_chunk_.capacity() * sizeof(std::size_t) +
                endpoints_.capacity() * sizeof(std::uint64_t) + sums_.capacity() * sizeof(sums_[0]);
     return u;
@@ -291,8 +290,7 @@ class ScanInserter {
       return;
     }
     // The threads' hashed scratch shares the room the map leaves under its limit.
-    const std::size_t elsewhere = in_map + bricks_.memory_usage() +
-                                  (order_.capacity() + slots_.capacity()) * sizeof(std::uint32_t);
+    const std::size_t elsewhere = in_map + apply_lists_bytes();
     if (limit && elsewhere >= limit) detail::memory_limit_exceeded(limit, elsewhere);
     for (unsigned t = 0; t < threads(); ++t)
       scratch(t).hashed.set_cap(limit ? (limit - elsewhere) / threads() : 0, limit, elsewhere);
@@ -304,18 +302,19 @@ class ScanInserter {
     walk_hashed(o, rays);
     add_visits(st);
     detail::order_hashed<Key>(scratch_, threads(), order_, slots_, limit, in_map);
-    const ScratchCounted counted(*map_, apply_scratch_bytes());
-    add_updates(
-        detail::apply_updates(*map_, detail::HashedUpdates{scratch(0).hashed, order_, slots_},
-                              values, team_, scratch_),
-        values, st);
+    apply(detail::HashedUpdates{scratch(0).hashed, order_, slots_}, values, st);
     scratch(0).hashed.clear();
+  }
+
+  // The apply's lists of touched bricks: the dense path's records, the hashed path's order and
+  // slots.
+  std::size_t apply_lists_bytes() const {
+    return bricks_.memory_usage() + (order_.capacity() + slots_.capacity()) * sizeof(std::uint32_t);
   }
 
   // The inserter's own memory held through the apply (hashed scratch, brick groups, order, slots).
   std::size_t apply_scratch_bytes() const {
-    std::size_t bytes =
-        bricks_.memory_usage() + (order_.capacity() + slots_.capacity()) * sizeof(std::uint32_t);
+    std::size_t bytes = apply_lists_bytes();
     for (unsigned t = 0; t < threads(); ++t) bytes += scratch_[t]->hashed.memory_usage();
     return bytes;
   }
@@ -405,11 +404,12 @@ class ScanInserter {
     team_.run(job);
   }
 
-  void apply(const detail::ScanValues& values, ScanStats& st) {
+  // The touched bricks (GroupedUpdates or HashedUpdates) into the map, the scratch counted
+  // against the map's limit meanwhile.
+  template <class Updates>
+  void apply(const Updates& bricks, const detail::ScanValues& values, ScanStats& st) {
     const ScratchCounted counted(*map_, apply_scratch_bytes());
-    add_updates(
-        detail::apply_updates(*map_, detail::GroupedUpdates{bricks_}, values, team_, scratch_),
-        values, st);
+    add_updates(detail::apply_updates(*map_, bricks, values, team_, scratch_), values, st);
   }
   // The dense scratch into the map: with one thread and no memory limit brick row by brick row,
   // without the touched bricks' records (the limit refuses a scan's bricks before any is made).
@@ -420,7 +420,7 @@ class ScanInserter {
       return;
     }
     detail::gather_dense<Key>(team_, scratch_, bricks_);
-    apply(values, st);
+    apply(detail::GroupedUpdates{bricks_}, values, st);
   }
   void add_updates(const detail::UpdateCounts& c, const detail::ScanValues& values, ScanStats& st) {
     st.occupied_voxels += c.occupied;

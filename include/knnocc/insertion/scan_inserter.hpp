@@ -129,7 +129,7 @@ class ScanInserter {
       u.miss_bitmaps += s.miss.capacity_bytes();
       u.point_buffers += s.part.rays.capacity_bytes() + s.part.hits.capacity_bytes() +
                          s.part.hit_logodds.capacity() * sizeof(float) +
-                         s.hit_list.capacity_bytes();
+                         s.hit_list.capacity_bytes() + s.hit_rows.capacity_bytes();
       u.ray_blocks += sizeof(*s.block);
       u.hashed += s.hashed.memory_usage();
       u.other += (s.row_hit.capacity() + s.row_miss.capacity()) * sizeof(VoxelMask) +

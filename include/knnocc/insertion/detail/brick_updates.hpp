@@ -158,9 +158,9 @@ void gather_dense(Team& team, ThreadScratches& scratch, BrickGroups& out) {
 /// order, without a record per touched brick (144 bytes each, megabytes for a large scan): each
 /// brick row of the thread's dense bitmaps is taken (and cleared), its touched bricks created and
 /// updated at once, in z, y, x order. With `codes` the hits come from s.hit_list (HitCodes, sorted
-/// here) instead of the hit bitmap. A fresh map first gets room for every touched brick (counted
-/// in a pass that leaves the scratch as it is), as apply_updates gives it. The same map, pool
-/// order and counts as the two-step path.
+/// here into s.hit_rows) instead of the hit bitmap. A fresh map first gets room for every touched
+/// brick (counted in a pass that leaves the scratch as it is), as apply_updates gives it. The same
+/// map, pool order and counts as the two-step path.
 template <class Key>
 UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const ScanValues& values,
                                 bool codes = false) {
@@ -173,14 +173,19 @@ UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const 
   s.row_miss.resize(static_cast<std::size_t>(nbx));
   VoxelMask* row_hit = s.row_hit.data();
   VoxelMask* row_miss = s.row_miss.data();
-  if (codes) s.hit_codes.by_row(s.hit_list.data(), s.hit_list.size());
+  if (codes) {
+    s.hit_rows.clear();
+    s.hit_codes.by_row(s.hit_list.data(), s.hit_list.size(),
+                       s.hit_rows.room_for(s.hit_list.size()));
+  }
+  const std::uint32_t* sorted = s.hit_rows.data();
   // Row (by, bz)'s hits into row_hit (from the hit bitmap, clearing it, or from the codes).
   auto take_hits = [&](std::int64_t by, std::int64_t bz) {
     if (!codes) {
       hit.take_brick_row(by, bz, row_hit);
       return;
     }
-    s.hit_codes.for_row(s.hit_list.data(), static_cast<std::size_t>(bz * nby + by),
+    s.hit_codes.for_row(sorted, static_cast<std::size_t>(bz * nby + by),
                         [&](std::size_t bx, int local) { row_hit[bx].set(local); });
   };
   if (map.num_bricks() == 0) {  // a fresh map: all are new
@@ -197,7 +202,7 @@ UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const 
         std::fill(s.row_any.begin(), s.row_any.end(), std::uint64_t{0});
         miss.or_brick_row(by, bz, any_miss);
         if (codes) {
-          s.hit_codes.for_row(s.hit_list.data(), static_cast<std::size_t>(bz * nby + by),
+          s.hit_codes.for_row(sorted, static_cast<std::size_t>(bz * nby + by),
                               [&](std::size_t bx, int) {
                                 miss.add_brick(any_miss, static_cast<std::int64_t>(bx));
                               });

@@ -5,13 +5,12 @@
 // A hit bitmap costs a bit per voxel of the box, mapped 2 MB at a time (ScanBitmap); a code costs
 // 4 bytes per hit. A code is the voxel's brick row (bz, by) of the box, its brick bx in the row
 // (bx_bits wide) and its index in the brick (local_of order, 9 bits): sorting the codes by brick
-// row (by_row: a counting sort in place) hands the apply each row's hits, which it ORs into the
+// row (by_row: a counting sort) hands the apply each row's hits, which it ORs into the
 // row's masks, with shifts only. The collector stores a hit only when its code differs from the
 // previous hit's (neighbouring points often share a voxel).
 
 #include <cstddef>
 #include <cstdint>
-#include <utility>
 #include <vector>
 
 #include "../../map/brick.hpp"
@@ -48,20 +47,16 @@ class HitCodes {
   }
   static int local_of(std::uint32_t c) { return static_cast<int>(c & (kBrickVoxels - 1)); }
 
-  /// Sorts codes[0, n) by brick row (in place); afterwards row r's codes are
-  /// [row_start(r), row_start(r + 1)).
-  void by_row(std::uint32_t* codes, std::size_t n) {
+  /// Writes codes[0, n) to out[0, n) sorted by brick row (a counting sort: one pass that streams
+  /// the codes, where sorting in place chains dependent random accesses); afterwards row r's
+  /// codes are out[row_start(r), row_start(r + 1)).
+  void by_row(const std::uint32_t* codes, std::size_t n, std::uint32_t* out) {
     const auto rows = static_cast<std::size_t>(rows_);
     start_.assign(rows + 1, 0);
     for (std::size_t i = 0; i < n; ++i) ++start_[row_of(codes[i]) + 1];
     for (std::size_t r = 0; r < rows; ++r) start_[r + 1] += start_[r];
     next_.assign(start_.begin(), start_.end() - 1);
-    for (std::size_t r = 0; r < rows; ++r)
-      while (next_[r] < start_[r + 1]) {  // the first unplaced code of row r's range
-        std::uint32_t c = codes[next_[r]];
-        for (std::size_t rc = row_of(c); rc != r; rc = row_of(c)) std::swap(c, codes[next_[rc]++]);
-        codes[next_[r]++] = c;
-      }
+    for (std::size_t i = 0; i < n; ++i) out[next_[row_of(codes[i])]++] = codes[i];
   }
   std::size_t row_start(std::size_t r) const { return start_[r]; }
   /// f(brick bx in the row, index in the brick) for each of brick row r's codes (after by_row).

@@ -30,6 +30,7 @@ struct ThreadScratch {
   ScanBitmap hit, miss;                  // walk, dense scratch: endpoints and free voxels
   AppendBuffer<std::uint32_t> hit_list;  // collect, chunked scans with few points: hit codes
   HitCodes hit_codes;                    // their encoding, and their order by brick row
+  AppendBuffer<std::uint32_t> hit_rows;  // apply: hit_list sorted by brick row
   HashedMarks hashed;                    // walk, hashed scratch
   std::unique_ptr<RayBlock> block = std::make_unique<RayBlock>();  // walk: rays set up
   std::size_t visits = 0;                                          // walk: voxels visited

@@ -55,7 +55,7 @@ file, or one point file (sensor at the origin, or at a PCD file's VIEWPOINT).)";
 void bind_io(py::module_& m) {
   m.def(
       "read_points",
-      [](py::handle path_obj) {
+      [](const py::object& path_obj) {
         const std::string path = path_in(path_obj);
         std::optional<io::Cloud> cloud;
         {
@@ -95,7 +95,7 @@ malformed.)");
 
   m.def(
       "read_sequence",
-      [](py::handle path_obj) {
+      [](const py::object& path_obj) {
         std::string path = path_in(path_obj);
         std::optional<io::ScanSource> source;
         {
@@ -111,7 +111,7 @@ malformed.)");
 
   m.def(
       "read_trajectory",
-      [](py::handle path_obj) {
+      [](const py::object& path_obj) {
         const std::string path = path_in(path_obj);
         std::vector<io::Pose> poses;
         {
@@ -133,7 +133,7 @@ malformed.)");
 
   m.def(
       "to_world",
-      [](py::handle pose, py::handle points) {
+      [](const py::object& pose, const py::object& points) {
         const Pose p = pose_in(pose, "pose");
         const PointsIn in(points, "points");
         std::vector<py::ssize_t> shape = in.outer_shape();

@@ -39,7 +39,7 @@ void look_up(const Map& map, const PointsView& points, F&& f) {
   });
 }
 
-py::array_t<std::int8_t> occupancy_at(const MapRef& self, py::handle points) {
+py::array_t<std::int8_t> occupancy_at(const MapRef& self, const py::object& points) {
   const PointsIn in(points, "points");
   py::array_t<std::int8_t> out(in.outer_shape());
   std::int8_t* o = out.mutable_data();
@@ -54,7 +54,7 @@ py::array_t<std::int8_t> occupancy_at(const MapRef& self, py::handle points) {
   return out;
 }
 
-py::array_t<float> logodds_at(const MapRef& self, py::handle points) {
+py::array_t<float> logodds_at(const MapRef& self, const py::object& points) {
   const PointsIn in(points, "points");
   py::array_t<float> out(in.outer_shape());
   float* o = out.mutable_data();
@@ -118,7 +118,7 @@ std::string lower_extension(const std::string& path) {
   return e;
 }
 
-void write(const MapRef& self, py::handle path_obj) {
+void write(const MapRef& self, const py::object& path_obj) {
   const std::string path = path_in(path_obj);
   const std::string ext = lower_extension(path);
   if (ext != ".bt" && ext != ".ot")
@@ -147,8 +147,8 @@ Point3f point_at(const PointsView& v, std::size_t i) {
   return v.visit([&](const auto& span) { return as_float(span[i]); });
 }
 
-py::tuple cast_ray(const MapRef& self, py::handle origin, py::handle direction, double max_range,
-                   bool ignore_unknown) {
+py::tuple cast_ray(const MapRef& self, const py::object& origin, const py::object& direction,
+                   double max_range, bool ignore_unknown) {
   const PointsIn o(origin, "origin"), d(direction, "direction");
   const std::size_t n = std::max(o.size(), d.size());
   if ((o.size() != 1 && o.size() != n) || (d.size() != 1 && d.size() != n))
@@ -299,8 +299,8 @@ void bind_map(py::module_& m) {
         "out of range.");
   c.def(
       "insert_point_cloud",
-      [](const MapRef& self, py::handle points, py::handle origin, double max_range, int threads,
-         bool discretize) {
+      [](const MapRef& self, const py::object& points, const py::object& origin, double max_range,
+         int threads, bool discretize) {
         MapObject& object = self.writable("OccupancyMap.insert_point_cloud");
         if (threads < 1 || threads > 1024)
           throw py::value_error("threads must be in [1, 1024], got " + std::to_string(threads));
@@ -392,7 +392,7 @@ map, or a zero direction.)");
         return a.owner->map().resolution() == b.owner->map().resolution() &&
                same_voxels(a.owner->map(), b.owner->map());
       },
-      py::arg("other"),
+      py::arg("other"), py::is_operator(),
       "True when both maps have the same resolution and the same known voxels, each with the "
       "same log-odds bit for bit.");
   c.def("__repr__", &repr);
@@ -400,7 +400,7 @@ map, or a zero direction.)");
 
   m.def(
       "read_map",
-      [](py::handle path_obj) {
+      [](const py::object& path_obj) {
         const std::string path = path_in(path_obj);
         std::optional<Map> map;
         {
@@ -415,7 +415,7 @@ map, or a zero direction.)");
       "the file is missing or malformed.");
   m.def(
       "cast_ray",
-      [](const MapRef& map, py::handle origin, py::handle direction, double max_range,
+      [](const MapRef& map, const py::object& origin, const py::object& direction, double max_range,
          bool ignore_unknown) {
         return cast_ray(map, origin, direction, max_range, ignore_unknown);
       },

@@ -184,7 +184,8 @@ void bind_mappers(py::module_& m) {
              "A new mapper with an empty map; see help(knnocc.Mapper) for the parameters.");
   mapper.def(
       "insert_keyframe",
-      [](const MapperRef& self, py::handle origin, py::handle points, py::handle ids) {
+      [](const MapperRef& self, const py::object& origin, const py::object& points,
+         const py::object& ids) {
         const Point3d o = vec3_in(origin, "origin");
         const PointsIn in(points, "points");
         const std::vector<std::uint64_t> id = ids_in(ids, in.size(), "ids");
@@ -225,8 +226,8 @@ position; without ids every point is a new map point. A sequence gives ids alway
            "A new live mapper without keyframes; see help(knnocc.LiveMapper) for the parameters.");
   live.def(
       "add",
-      [](const LiveRef& self, py::handle keyframe_id, py::handle pose, py::handle points,
-         py::handle ids) {
+      [](const LiveRef& self, const py::object& keyframe_id, const py::object& pose,
+         const py::object& points, const py::object& ids) {
         const std::uint64_t id = id_in(keyframe_id, "keyframe_id");
         const Pose p = pose_in(pose, "pose");
         const PointsIn in(points, "points");
@@ -277,7 +278,7 @@ or None (k-NN model: always or never). ValueError for a known id or a bad pose.)
       "The number of keyframes.");
   live.def(
       "__contains__",
-      [](const LiveRef& self, py::handle id) {
+      [](const LiveRef& self, const py::object& id) {
         if (!py::isinstance<py::int_>(id) || id.cast<py::int_>() < py::int_(0)) return false;
         const std::uint64_t i = id_in(id, "keyframe id");
         const auto lock = self.owner->guard.read("LiveMapper.__contains__");

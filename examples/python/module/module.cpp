@@ -173,8 +173,7 @@ limit MemoryError.)";
   // the process: the translator raises it at any time.
   py::dict scope;
   scope["__name__"] = "knnocc";
-  py::exec(R"(
-class Error(OSError):
+  py::exec(R"(class Error(OSError):
     """An unreadable or malformed input file, or an output that cannot be written.
 
     str(e) is "FILE: problem"; e.filename is the file and e.strerror the problem."""

@@ -60,6 +60,13 @@ std::string path_in(py::handle obj);
 /// A pose as a 4x4 float64 array.
 py::array_t<double> pose_out(const Pose& p);
 
+/// f() with the GIL released; its result (a C++ value) is made before the GIL is taken back.
+template <class F>
+auto without_gil(F&& f) {
+  const py::gil_scoped_release nogil;
+  return f();
+}
+
 /// `v`'s elements as a numpy array of `shape` without a copy (the array owns the vector).
 template <class Scalar, class Elem>
 py::array_t<Scalar> adopt(std::vector<Elem>&& v, std::vector<py::ssize_t> shape) {

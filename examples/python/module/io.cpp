@@ -1,7 +1,6 @@
 // Files in, numpy out: read_points, read_sequence (a Sequence of keyframes), read_trajectory, and
 // to_world, which moves sensor-frame points as the tool does.
 
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -33,13 +32,9 @@ py::tuple keyframe(const SequenceRef& s, py::ssize_t i) {
   const auto n = static_cast<py::ssize_t>(s.source.size());
   if (i < 0) i += n;
   if (i < 0 || i >= n) throw py::index_error("keyframe index out of range");
-  std::optional<io::Scan> scan;
-  {
-    const py::gil_scoped_release nogil;
-    scan.emplace(s.source.load(static_cast<std::size_t>(i)));
-  }
-  py::tuple cloud = cloud_out(std::move(scan->cloud));
-  return py::make_tuple(pose_out(Pose::from(scan->pose)), cloud[0], cloud[1]);
+  io::Scan scan = without_gil([&] { return s.source.load(static_cast<std::size_t>(i)); });
+  py::tuple cloud = cloud_out(std::move(scan.cloud));
+  return py::make_tuple(pose_out(Pose::from(scan.pose)), cloud[0], cloud[1]);
 }
 
 constexpr const char* kSequenceDoc = R"(The keyframes of a sequence, loaded one at a time.
@@ -57,12 +52,7 @@ void bind_io(py::module_& m) {
       "read_points",
       [](const py::object& path_obj) {
         const std::string path = path_in(path_obj);
-        std::optional<io::Cloud> cloud;
-        {
-          const py::gil_scoped_release nogil;
-          cloud.emplace(io::read_points(path));
-        }
-        return cloud_out(std::move(*cloud));
+        return cloud_out(without_gil([&] { return io::read_points(path); }));
       },
       py::arg("path"),
       R"((points, ids): a point file as (N, 3) float32 and uint64 (N,) map-point ids (a PLY `id`
@@ -97,12 +87,8 @@ malformed.)");
       "read_sequence",
       [](const py::object& path_obj) {
         std::string path = path_in(path_obj);
-        std::optional<io::ScanSource> source;
-        {
-          const py::gil_scoped_release nogil;
-          source.emplace(io::ScanSource::open(path));
-        }
-        return SequenceRef{std::move(path), std::move(*source)};
+        io::ScanSource source = without_gil([&] { return io::ScanSource::open(path); });
+        return SequenceRef{std::move(path), std::move(source)};
       },
       py::arg("path"),
       "The keyframes of a sequence folder (poses.txt + clouds/), an OctoMap .graph file or one "
@@ -113,11 +99,7 @@ malformed.)");
       "read_trajectory",
       [](const py::object& path_obj) {
         const std::string path = path_in(path_obj);
-        std::vector<io::Pose> poses;
-        {
-          const py::gil_scoped_release nogil;
-          poses = io::read_trajectory(path);
-        }
+        const std::vector<io::Pose> poses = without_gil([&] { return io::read_trajectory(path); });
         py::array_t<double> out(
             {static_cast<py::ssize_t>(poses.size()), py::ssize_t{4}, py::ssize_t{4}});
         for (std::size_t i = 0; i < poses.size(); ++i) {

@@ -134,13 +134,10 @@ void write(const MapRef& self, const py::object& path_obj) {
 py::bytes to_bytes(const MapRef& self, const std::string& format) {
   if (format != "bt" && format != "ot")
     throw py::value_error("format must be 'bt' or 'ot', got '" + format + "'");
-  std::string bytes;
-  {
-    const auto lock = self.owner->guard.read("OccupancyMap.to_bytes");
-    const py::gil_scoped_release nogil;
-    bytes = format == "bt" ? io::encode_bt(self.owner->map()) : io::encode_ot(self.owner->map());
-  }
-  return py::bytes(bytes);
+  const auto lock = self.owner->guard.read("OccupancyMap.to_bytes");
+  return py::bytes(without_gil([&] {
+    return format == "bt" ? io::encode_bt(self.owner->map()) : io::encode_ot(self.owner->map());
+  }));
 }
 
 Point3f point_at(const PointsView& v, std::size_t i) {
@@ -402,12 +399,7 @@ map, or a zero direction.)");
       "read_map",
       [](const py::object& path_obj) {
         const std::string path = path_in(path_obj);
-        std::optional<Map> map;
-        {
-          const py::gil_scoped_release nogil;
-          map.emplace(io::read_octree(path));
-        }
-        return wrap(make_map_object(std::move(*map), 0.7, 0.4));
+        return wrap(make_map_object(without_gil([&] { return io::read_octree(path); }), 0.7, 0.4));
       },
       py::arg("path"),
       "Reads an OctoMap .bt or .ot file (told apart by its first line) into a new OccupancyMap "

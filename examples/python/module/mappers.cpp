@@ -1,7 +1,7 @@
 // Python's Mapper (one keyframe at a time, paper Alg. 3, any of the three models) and LiveMapper
 // (keyframes added, re-posed and removed under SLAM corrections; the map stays exact).
 
-#include <climits>
+#include <deque>
 #include <string>
 #include <utility>
 #include <vector>
@@ -110,20 +110,44 @@ py::object map_of(const std::shared_ptr<MapOwner>& owner) {
   return py::cast(MapRef{owner, nullptr});
 }
 
+// "Cls.member" for guards and messages, kept as long as the module (a guard keeps the name of
+// the writer it lets in).
+const char* member_name(const char* cls, const char* member) {
+  static std::deque<std::string> names;
+  return names.emplace_back(std::string(cls) + "." + member).c_str();
+}
+
+// What Mapper and LiveMapper have alike: map, model, statistics, memory_limit, repr.
 template <class Ref>
-void memory_limit_property(py::class_<Ref>& c, const char* read_name, const char* write_name) {
+void bind_owner_members(py::class_<Ref>& c, const char* cls, const char* models) {
+  c.def_property_readonly(
+      "map", [](const Ref& self) { return map_of(self.owner); },
+      "The map, as an OccupancyMap that reads only (it follows its owner).");
+  c.def_property_readonly(
+      "model", [](const Ref& self) { return self.model; }, models);
+  c.def(
+      "statistics",
+      [name = member_name(cls, "statistics")](const Ref& self) {
+        const auto lock = self.owner->guard.read(name);
+        return stats_out(self.owner->statistics());
+      },
+      "The k-NN statistics of the map point cloud: {'k', 'map_points', 'valid', 'mu', 'sigma'} "
+      "(the tool's `knn` line); {} for the OctoMap model.");
   c.def_property(
       "memory_limit",
-      [read_name](const Ref& self) {
-        const auto lock = self.owner->guard.read(read_name);
+      [name = member_name(cls, "memory_limit")](const Ref& self) {
+        const auto lock = self.owner->guard.read(name);
         return self.owner->map().memory_limit();
       },
-      [write_name](const Ref& self, std::size_t bytes) {
-        const auto lock = self.owner->guard.write(write_name);
+      [name = member_name(cls, "memory_limit")](const Ref& self, std::size_t bytes) {
+        const auto lock = self.owner->guard.write(name);
         self.owner->set_memory_limit(bytes);
       },
       "Bytes the map may use (0: no limit, the default); an insertion that would pass it raises "
       "MemoryError.");
+  c.def("__repr__", [cls](const Ref& self) {
+    return std::string("<knnocc.") + cls + " model '" + self.model + "'>";
+  });
 }
 
 constexpr const char* kParamsDoc = R"(
@@ -199,22 +223,7 @@ position, 3 numbers); `ids` one map-point id per point (e.g. ORB-SLAM's MapPoint
 The map point cloud is the union of the keyframes' points: an id joins once, at its first
 position; without ids every point is a new map point. A sequence gives ids always or never
 (ValueError otherwise). The OctoMap model ignores ids. MemoryError past memory_limit.)");
-  mapper.def_property_readonly(
-      "map", [](const MapperRef& self) { return map_of(self.owner); },
-      "The map, as an OccupancyMap that reads only (it follows the mapper).");
-  mapper.def_property_readonly(
-      "model", [](const MapperRef& self) { return self.model; }, "'octomap', 'knn' or 'robust'.");
-  mapper.def(
-      "statistics",
-      [](const MapperRef& self) {
-        const auto lock = self.owner->guard.read("Mapper.statistics");
-        return stats_out(self.owner->statistics());
-      },
-      "The k-NN statistics of the map point cloud: {'k', 'map_points', 'valid', 'mu', 'sigma'} "
-      "(the tool's `knn` line); {} for the OctoMap model.");
-  memory_limit_property(mapper, "Mapper.memory_limit", "Mapper.memory_limit");
-  mapper.def("__repr__",
-             [](const MapperRef& self) { return "<knnocc.Mapper model '" + self.model + "'>"; });
+  bind_owner_members(mapper, "Mapper", "'octomap', 'knn' or 'robust'.");
 
   py::class_<LiveRef> live(m, "LiveMapper", (std::string(kLiveDoc) + kParamsDoc).c_str());
   live.def(py::init([](double resolution, const std::string& model, const py::kwargs& kw) {
@@ -286,19 +295,6 @@ or None (k-NN model: always or never). ValueError for a known id or a bad pose.)
       },
       py::arg("keyframe_id"), "Whether the keyframe is held.");
   live.def_property_readonly(
-      "map", [](const LiveRef& self) { return map_of(self.owner); },
-      "The map, as an OccupancyMap that reads only (it follows the live mapper).");
-  live.def_property_readonly(
-      "model", [](const LiveRef& self) { return self.model; }, "'octomap' or 'knn'.");
-  live.def(
-      "statistics",
-      [](const LiveRef& self) {
-        const auto lock = self.owner->guard.read("LiveMapper.statistics");
-        return stats_out(self.owner->statistics());
-      },
-      "The k-NN statistics of the map point cloud (as Mapper.statistics); {} for the OctoMap "
-      "model.");
-  live.def_property_readonly(
       "last_update",
       [](const LiveRef& self) {
         const auto lock = self.owner->guard.read("LiveMapper.last_update");
@@ -313,9 +309,7 @@ or None (k-NN model: always or never). ValueError for a known id or a bad pose.)
       "What the last add / repose / remove did: {'changed': keyframes added, re-posed or removed, "
       "'replayed': keyframes whose rays were cast again, 'bricks': map bricks recomputed by a "
       "regional replay, 'rebuilt': the map was built again from scratch}.");
-  memory_limit_property(live, "LiveMapper.memory_limit", "LiveMapper.memory_limit");
-  live.def("__repr__",
-           [](const LiveRef& self) { return "<knnocc.LiveMapper model '" + self.model + "'>"; });
+  bind_owner_members(live, "LiveMapper", "'octomap' or 'knn'.");
 }
 
 }  // namespace knnocc::python

@@ -29,43 +29,39 @@ Point3d centre(const Map& map, const OcKey& k) {
   return {g.index_to_coord(k[0]), g.index_to_coord(k[1]), g.index_to_coord(k[2])};
 }
 
-// f(i, log-odds or nullopt) for every point: the voxel holding it, unknown outside the key range.
-template <class F>
-void look_up(const Map& map, const PointsView& points, F&& f) {
-  points.visit([&](const auto& span) {
-    OcKey key;
-    for (std::size_t i = 0; i < span.size(); ++i)
-      f(i, map.grid().point_to_key(span[i], key) ? map.logodds(key) : std::nullopt);
-  });
-}
-
-py::array_t<std::int8_t> occupancy_at(const MapRef& self, const py::object& points) {
+// One T per point, value(map, log-odds or nullopt) of the voxel holding it (unknown outside the
+// key range), in an array of the points' outer shape.
+template <class T, class F>
+py::array_t<T> per_point(const MapRef& self, const py::object& points, const char* what,
+                         F&& value) {
   const PointsIn in(points, "points");
-  py::array_t<std::int8_t> out(in.outer_shape());
-  std::int8_t* o = out.mutable_data();
-  const auto lock = self.owner->guard.read("OccupancyMap.occupancy_at");
+  py::array_t<T> out(in.outer_shape());
+  T* o = out.mutable_data();
+  const auto lock = self.owner->guard.read(what);
   {
     const py::gil_scoped_release nogil;
     const Map& map = self.owner->map();
-    look_up(map, in.view(), [&](std::size_t i, std::optional<float> v) {
-      o[i] = v ? static_cast<std::int8_t>(map.is_occupied(*v)) : std::int8_t{-1};
+    in.view().visit([&](const auto& span) {
+      OcKey key;
+      for (std::size_t i = 0; i < span.size(); ++i)
+        o[i] = value(map, map.grid().point_to_key(span[i], key) ? map.logodds(key) : std::nullopt);
     });
   }
   return out;
 }
 
+py::array_t<std::int8_t> occupancy_at(const MapRef& self, const py::object& points) {
+  return per_point<std::int8_t>(
+      self, points, "OccupancyMap.occupancy_at", [](const Map& map, std::optional<float> v) {
+        return v ? static_cast<std::int8_t>(map.is_occupied(*v)) : std::int8_t{-1};
+      });
+}
+
 py::array_t<float> logodds_at(const MapRef& self, const py::object& points) {
-  const PointsIn in(points, "points");
-  py::array_t<float> out(in.outer_shape());
-  float* o = out.mutable_data();
-  const auto lock = self.owner->guard.read("OccupancyMap.logodds_at");
-  {
-    const py::gil_scoped_release nogil;
-    look_up(self.owner->map(), in.view(), [&](std::size_t i, std::optional<float> v) {
-      o[i] = v ? *v : std::numeric_limits<float>::quiet_NaN();
-    });
-  }
-  return out;
+  return per_point<float>(self, points, "OccupancyMap.logodds_at",
+                          [](const Map&, std::optional<float> v) {
+                            return v ? *v : std::numeric_limits<float>::quiet_NaN();
+                          });
 }
 
 enum class Which { occupied, free, all };
@@ -151,8 +147,7 @@ py::tuple cast_ray(const MapRef& self, const py::object& origin, const py::objec
   if ((o.size() != 1 && o.size() != n) || (d.size() != 1 && d.size() != n))
     throw py::value_error("cast_ray: " + std::to_string(o.size()) + " origins for " +
                           std::to_string(d.size()) +
-                          " directions (give one of each, one origin "
-                          "for N directions, or N of each)");
+                          " directions (one of each, one origin for N directions, or N of each)");
   py::array_t<bool> hits(static_cast<py::ssize_t>(n));
   py::array_t<double> ends({static_cast<py::ssize_t>(n), py::ssize_t{3}});
   bool* h = hits.mutable_data();

@@ -53,7 +53,6 @@ ModelOptions options_in(const char* cls, const std::string& model, const py::kwa
                                 : "'octomap', 'knn' or 'robust'") +
                           ", got '" + model + "'");
   ModelOptions o;
-  o.model = model;
   double clamp_min = 0.1192, clamp_max = 0.971;
   for (const auto& item : kw) {
     const std::string key = py::str(item.first);

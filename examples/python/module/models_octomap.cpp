@@ -16,7 +16,6 @@ class MapWithInserter final : public MapObject {
         map_(std::move(map)),
         inserter_(map_, OctoMapModel::from_probabilities(prob_hit, prob_miss)) {}
   const Map& map() const override { return map_; }
-  Map& map_for_write() override { return map_; }
   void set_memory_limit(std::size_t bytes) override { map_.set_memory_limit(bytes); }
   void insert_point_cloud(const Point3d& origin, const PointsView& points, double max_range,
                           unsigned threads, bool discretize) override {

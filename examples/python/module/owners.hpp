@@ -33,7 +33,6 @@ using Pose = cli::EigenPose;
 
 /// Everything Mapper and LiveMapper take besides the resolution (Python keyword arguments).
 struct ModelOptions {
-  std::string model = "octomap";           ///< octomap, knn or robust
   double prob_hit = 0.7, prob_miss = 0.4;  ///< OctoMap model
   KnnModelParams knn;                      ///< k-NN and robust models
   std::uint32_t min_views = 3;             ///< robust model
@@ -73,7 +72,6 @@ class MapOwner {
 class MapObject : public MapOwner {
  public:
   MapObject(double prob_hit, double prob_miss) : prob_hit_(prob_hit), prob_miss_(prob_miss) {}
-  virtual Map& map_for_write() = 0;
   /// ScanInserter::insert_point_cloud with `threads` threads.
   virtual void insert_point_cloud(const Point3d& origin, const PointsView& points, double max_range,
                                   unsigned threads, bool discretize) = 0;

@@ -359,7 +359,7 @@ voxels (OctoMap's option). MemoryError when the map would pass its memory_limit.
         object.set_memory_limit(bytes);
       },
       "Bytes the map (and the inserter's scratch) may use; 0: no limit (the default). An "
-      "insertion that would pass it raises MemoryError before it changes the map.");
+      "insertion that would pass it raises MemoryError.");
   c.def("write", &write, py::arg("path"),
         "Writes the map as an OctoMap file chosen by the extension: .bt (binary tree: occupied or "
         "free, what octovis and octomap_server read) or .ot (full tree with log-odds); the bytes "
@@ -400,15 +400,9 @@ map, or a zero direction.)");
       "Reads an OctoMap .bt or .ot file (told apart by its first line) into a new OccupancyMap "
       "(.bt leaves get the clamping bounds, .ot leaves keep their log-odds). knnocc.Error when "
       "the file is missing or malformed.");
-  m.def(
-      "cast_ray",
-      [](const MapRef& map, const py::object& origin, const py::object& direction, double max_range,
-         bool ignore_unknown) {
-        return cast_ray(map, origin, direction, max_range, ignore_unknown);
-      },
-      py::arg("map"), py::arg("origin"), py::arg("direction"), py::arg("max_range") = -1.0,
-      py::arg("ignore_unknown") = false,
-      "map.cast_ray(origin, direction, ...), as C++'s cast_ray(map, ...).");
+  m.def("cast_ray", &cast_ray, py::arg("map"), py::arg("origin"), py::arg("direction"),
+        py::arg("max_range") = -1.0, py::arg("ignore_unknown") = false,
+        "map.cast_ray(origin, direction, ...), as C++'s cast_ray(map, ...).");
 }
 
 }  // namespace knnocc::python

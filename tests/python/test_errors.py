@@ -29,6 +29,8 @@ def test_wrong_types(knnocc):
     with pytest.raises(TypeError):
         knnocc.Mapper(0.1, max_range="far")
     with pytest.raises(TypeError):
+        knnocc.Mapper(0.1, discretize="yes")
+    with pytest.raises(TypeError):
         knnocc.LiveMapper(0.1).add("one", np.eye(4), POINTS)
 
 

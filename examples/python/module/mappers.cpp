@@ -37,6 +37,11 @@ long long integer(py::handle v, const std::string& key, long long lo, long long 
   return x;
 }
 
+bool flag(py::handle v, const std::string& key) {
+  if (!py::isinstance<py::bool_>(v)) throw py::type_error(key + " must be True or False");
+  return v.cast<bool>();
+}
+
 constexpr const char* kCommon = "max_range, threads, clamp_min, clamp_max";
 constexpr const char* kOctoMap = "prob_hit, prob_miss, discretize";
 constexpr const char* kKnn = "k, w, p_upper, p_w, p_free, s_limit";
@@ -70,7 +75,7 @@ ModelOptions options_in(const char* cls, const std::string& model, const py::kwa
     else if (octomap && key == "prob_miss")
       o.prob_miss = number(v);
     else if (octomap && key == "discretize")
-      o.mapper.discretize = v.cast<bool>();
+      o.mapper.discretize = flag(v, key);
     else if (!octomap && key == "k")
       o.knn.k = static_cast<std::size_t>(integer(v, key, 1, 4096));
     else if (!octomap && key == "w")

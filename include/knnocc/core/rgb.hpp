@@ -3,6 +3,10 @@
 // ColorOcTree store it.
 
 #include <cstdint>
+#include <functional>
+#include <optional>
+
+#include "key.hpp"
 
 namespace knnocc {
 
@@ -14,5 +18,10 @@ struct Rgb {
   }
   friend bool operator!=(const Rgb& a, const Rgb& c) { return !(a == c); }
 };
+
+/// The colour of a voxel, or nullopt when it has none: what writers of coloured maps take (e.g.
+/// [&](const OcKey& k) { return colors.mean(k); } for a VoxelColors).
+template <class Key = OcKey>
+using VoxelColorOf = std::function<std::optional<Rgb>(const Key&)>;
 
 }  // namespace knnocc

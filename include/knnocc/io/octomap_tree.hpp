@@ -35,9 +35,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <functional>
 #include <limits>
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -75,9 +73,6 @@ struct OctreeInfo {
   int min_leaf_depth = 0, max_leaf_depth = 0;          ///< 0 when there are no leaves
   double min[3] = {0, 0, 0}, max[3] = {0, 0, 0};       ///< box of the leaves (metres)
 };
-
-/// The colour of a voxel in a ColorOcTree file; nullopt: none (written as white).
-using VoxelColorOf = std::function<std::optional<Rgb>(const OcKey&)>;
 
 namespace detail {
 
@@ -148,7 +143,7 @@ class OctreeEncoder {
   using Map = OccupancyMap<OcKey>;
   using Brick = Map::Brick;
 
-  explicit OctreeEncoder(const Map& map, VoxelColorOf color_of = {})
+  explicit OctreeEncoder(const Map& map, VoxelColorOf<OcKey> color_of = {})
       : map_(map), color_of_(std::move(color_of)) {}
 
   /// The whole file: header and node stream.
@@ -360,7 +355,7 @@ class OctreeEncoder {
   }
 
   const Map& map_;
-  VoxelColorOf color_of_;
+  VoxelColorOf<OcKey> color_of_;
   std::vector<Entry> order_;
   std::string data_;
   std::uint64_t nodes_ = 0;
@@ -462,11 +457,11 @@ inline void write_ot(const std::string& path, const OccupancyMap<OcKey>& map) {
 
 /// The bytes of `map` as a ColorOcTree .ot file, with color_of(key) for each occupied voxel
 /// (see the file comment); liboctomap reads it as a ColorOcTree.
-inline std::string encode_color_ot(const OccupancyMap<OcKey>& map, VoxelColorOf color_of) {
+inline std::string encode_color_ot(const OccupancyMap<OcKey>& map, VoxelColorOf<OcKey> color_of) {
   return detail::OctreeEncoder<true, true>(map, std::move(color_of)).encode();
 }
 inline void write_color_ot(const std::string& path, const OccupancyMap<OcKey>& map,
-                           VoxelColorOf color_of) {
+                           VoxelColorOf<OcKey> color_of) {
   AtomicFile out(path);
   out.write(encode_color_ot(map, std::move(color_of)));
   out.commit();

@@ -75,29 +75,34 @@ struct TreeSceneParams {
 
   void validate() const {
     if (keyframes < 1 || keyframes > 100000)
-      detail::invalid_argument("keyframes must be in [1, 100000]");
-    if (!(radius > 1.5 && radius < 100)) detail::invalid_argument("radius must be in (1.5, 100) m");
-    if (!(detect > 0 && detect <= 1)) detail::invalid_argument("detect must be in (0, 1]");
-    if (!(outliers >= 0 && outliers < 1)) detail::invalid_argument("outliers must be in [0, 1)");
+      knnocc::detail::invalid_argument("keyframes must be in [1, 100000]");
+    if (!(radius > 1.5 && radius < 100))
+      knnocc::detail::invalid_argument("radius must be in (1.5, 100) m");
+    if (!(detect > 0 && detect <= 1)) knnocc::detail::invalid_argument("detect must be in (0, 1]");
+    if (!(outliers >= 0 && outliers < 1))
+      knnocc::detail::invalid_argument("outliers must be in [0, 1)");
     if (!(disparity_noise >= 0 && lateral_noise >= 0 && disparity_noise < 100 &&
           lateral_noise < 10))
-      detail::invalid_argument("noise must be >= 0 (disparity < 100 px, lateral < 10 m)");
+      knnocc::detail::invalid_argument("noise must be >= 0 (disparity < 100 px, lateral < 10 m)");
     auto in = [](double v, double lo, double hi) { return v >= lo && v <= hi; };  // NaN fails
-    if (!in(height, -100, 100)) detail::invalid_argument("height must be in [-100, 100] m");
+    if (!in(height, -100, 100)) knnocc::detail::invalid_argument("height must be in [-100, 100] m");
     if (!in(focal, 1, 1e5) || !in(baseline, 1e-3, 10) || width < 16 || height_px < 16 ||
         width > 100000 || height_px > 100000)
-      detail::invalid_argument(
+      knnocc::detail::invalid_argument(
           "camera: focal in [1, 1e5] px, baseline in [1 mm, 10 m], image sides in [16, 1e5] px");
     if (!in(foliage_density, 0, 1e4) || !in(pot_density, 0, 1e4) || !in(ground_density, 0, 1e4))
-      detail::invalid_argument("densities must be in [0, 1e4] sites per m^2");
-    if (!in(ground_radius, 0, 100)) detail::invalid_argument("ground_radius must be in [0, 100] m");
+      knnocc::detail::invalid_argument("densities must be in [0, 1e4] sites per m^2");
+    if (!in(ground_radius, 0, 100))
+      knnocc::detail::invalid_argument("ground_radius must be in [0, 100] m");
     if (outlier_cluster < 1 || outlier_cluster > 100)
-      detail::invalid_argument("outlier_cluster must be in [1, 100]");
-    if (!in(cluster_radius, 0, 1)) detail::invalid_argument("cluster_radius must be in [0, 1] m");
-    if (outlier_repeat > 1000) detail::invalid_argument("outlier_repeat must be in [0, 1000]");
-    if (!in(repeat_prob, 0, 1)) detail::invalid_argument("repeat_prob must be in [0, 1]");
+      knnocc::detail::invalid_argument("outlier_cluster must be in [1, 100]");
+    if (!in(cluster_radius, 0, 1))
+      knnocc::detail::invalid_argument("cluster_radius must be in [0, 1] m");
+    if (outlier_repeat > 1000)
+      knnocc::detail::invalid_argument("outlier_repeat must be in [0, 1000]");
+    if (!in(repeat_prob, 0, 1)) knnocc::detail::invalid_argument("repeat_prob must be in [0, 1]");
     if (!in(outlier_depth_gain, 0, 10))
-      detail::invalid_argument("outlier_depth_gain must be in [0, 10]");
+      knnocc::detail::invalid_argument("outlier_depth_gain must be in [0, 10]");
   }
 };
 

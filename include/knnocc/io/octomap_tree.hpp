@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "../core/key.hpp"
+#include "../map/detail/brick_access.hpp"
 #include "../map/occupancy_map.hpp"
 #include "atomic_file.hpp"
 #include "detail/bytes.hpp"
@@ -99,12 +100,12 @@ inline void put_octree_leaf(OccupancyMap<OcKey>& map, int d, const NodeCorner& c
   if (span >= static_cast<std::uint32_t>(kBrickEdge)) {
     const std::int64_t bricks = span >> kBrickBits;
     const std::int64_t b0[3] = {c.k[0] >> kBrickBits, c.k[1] >> kBrickBits, c.k[2] >> kBrickBits};
+    knnocc::detail::BrickWriter<OcKey> w(map);
     for (std::int64_t x = 0; x < bricks; ++x)
       for (std::int64_t y = 0; y < bricks; ++y)
         for (std::int64_t z = 0; z < bricks; ++z) {
-          auto& b =
-              map.brick_at(map.brick_slot(layout::pack_brick(b0[0] + x, b0[1] + y, b0[2] + z)));
-          map.fill_brick(b, v);
+          auto& b = w.brick_at(w.brick_slot(layout::pack_brick(b0[0] + x, b0[1] + y, b0[2] + z)));
+          w.fill_brick(b, v);
         }
     return;
   }
@@ -134,7 +135,7 @@ class OctreeEncoder {
 
   /// The whole file: header and node stream.
   std::string encode() {
-    const auto& bricks = map_.bricks();
+    const auto& bricks = knnocc::detail::brick_reader(map_).bricks();
     order_.clear();
     order_.reserve(bricks.size());
     for (std::size_t i = 0; i < bricks.size(); ++i) {
@@ -249,7 +250,8 @@ class OctreeEncoder {
 
   // Depth d < 13 over the bricks order_[lo, hi), which all lie in this node.
   bool tree_node(int d, std::size_t lo, std::size_t hi, Summary& out) {
-    if (d == kBrickDepth) return brick_node(map_.bricks()[order_[lo].index], out);
+    if (d == kBrickDepth)
+      return brick_node(knnocc::detail::brick_reader(map_).bricks()[order_[lo].index], out);
     const int shift = 3 * (kBrickDepth - 1 - d);
     std::size_t cur = lo;
     return node(

@@ -43,6 +43,7 @@
 #include "../core/point3.hpp"
 #include "../knn/change_set.hpp"
 #include "../map/brick.hpp"
+#include "../map/detail/brick_access.hpp"
 #include "../mapper.hpp"
 #include "keyframe_store.hpp"
 #include "rigid_pose.hpp"
@@ -292,14 +293,16 @@ class LiveMapper {
     };
     // Bricks the replay produced, then bricks of the map the replay has none of (only changed
     // keyframes reached them before: they become unknown).
-    for (const auto& b : from.bricks())
+    detail::BrickWriter<Key> writer(to);
+    const detail::BrickReader<Key> old(to), replayed(from);
+    for (const auto& b : replayed.bricks())
       if (in_region(b.coord)) {
-        to.copy_brick_from(from, b.coord);
+        writer.copy_brick_from(from, b.coord);
         ++last_.bricks;
       }
     auto clear_if_stale = [&](std::uint64_t coord) {
-      if (from.find_brick(coord) || !in_region(coord)) return;
-      to.copy_brick_from(from, coord);
+      if (replayed.find_brick(coord) || !in_region(coord)) return;
+      writer.copy_brick_from(from, coord);
       ++last_.bricks;
     };
     for (const BrickBox& r : region) {
@@ -308,12 +311,12 @@ class LiveMapper {
           for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
             for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) {
               const std::uint64_t c = layout::pack_brick(x, y, z);
-              const auto* b = to.find_brick(c);
+              const auto* b = old.find_brick(c);
               if (b && b->known.any()) clear_if_stale(c);
             }
       } else {
-        for (std::size_t s = 0; s < to.bricks().size(); ++s) {
-          const auto& b = to.bricks()[s];
+        for (std::size_t s = 0; s < old.bricks().size(); ++s) {
+          const auto& b = old.bricks()[s];
           if (b.known.any()) clear_if_stale(b.coord);
         }
       }

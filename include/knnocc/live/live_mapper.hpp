@@ -128,9 +128,9 @@ class LiveMapper {
     kf.pose = pose;
     kf.points = std::move(points);
     kf.ids = std::move(ids);
-    to_world(kf);
-    kf.reach = reach();
-    insert(*mapper_, kf);
+    const WorldKeyframe w = to_world(kf);
+    kf.reach = reach(w);
+    insert(*mapper_, kf, w);
     store_.push_back(std::move(kf));
     last_ = LiveUpdate{1, 1, 0, false};
   }
@@ -165,8 +165,7 @@ class LiveMapper {
       return;
     }
     for (const std::size_t i : moved) {  // where it is now
-      to_world(store_[i]);
-      store_[i].reach = reach();
+      store_[i].reach = reach(to_world(store_[i]));
       region.push_back(store_[i].reach);
     }
     replay(region);
@@ -196,9 +195,9 @@ class LiveMapper {
     auto fresh = std::make_unique<mapper_type>(resolution_, model_, options_);
     fresh->map().set_memory_limit(memory_limit_);
     for (std::size_t i = 0; i < store_.size(); ++i) {
-      to_world(store_[i]);
-      if constexpr (!uses_map_cloud) store_[i].reach = reach();
-      insert(*fresh, store_[i]);
+      const WorldKeyframe w = to_world(store_[i]);
+      if constexpr (!uses_map_cloud) store_[i].reach = reach(w);
+      insert(*fresh, store_[i], w);
     }
     mapper_ = std::move(fresh);
     last_.replayed = store_.size();
@@ -213,20 +212,26 @@ class LiveMapper {
     if (!is_finite(o)) detail::invalid_argument("LiveMapper: the pose's origin is not finite");
   }
 
-  // world_ and origin_: kf's points as a from-scratch Mapper receives them.
-  void to_world(const keyframe_type& kf) {
-    origin_ = pose_traits<Pose>::origin(kf.pose);
-    world_.resize(kf.points.size());
+  // A keyframe as a from-scratch Mapper receives it: sensor origin and world-frame points.
+  struct WorldKeyframe {
+    Point3d origin;
+    std::vector<Point3d> points;
+  };
+  static WorldKeyframe to_world(const keyframe_type& kf) {
+    WorldKeyframe w{pose_traits<Pose>::origin(kf.pose), std::vector<Point3d>(kf.points.size())};
     for (std::size_t j = 0; j < kf.points.size(); ++j)
-      world_[j] = pose_traits<Pose>::to_world(kf.pose, kf.points[j]);
+      w.points[j] = pose_traits<Pose>::to_world(kf.pose, kf.points[j]);
+    return w;
   }
-  BrickBox reach() const { return reach_of<Key>(origin_, world_, resolution_, options_.max_range); }
-  // Inserts the keyframe loaded by to_world().
-  void insert(mapper_type& m, const keyframe_type& kf) {
+  BrickBox reach(const WorldKeyframe& w) const {
+    return reach_of<Key>(w.origin, w.points, resolution_, options_.max_range);
+  }
+  // `w`: to_world(kf), or part of its points (a regional replay).
+  static void insert(mapper_type& m, const keyframe_type& kf, const WorldKeyframe& w) {
     if constexpr (uses_map_cloud)
-      m.insert_keyframe(origin_, world_, kf.ids);
+      m.insert_keyframe(w.origin, w.points, kf.ids);
     else
-      m.insert_keyframe(origin_, world_);
+      m.insert_keyframe(w.origin, w.points);
   }
 
   void update(const std::vector<BrickBox>& region) {
@@ -261,24 +266,24 @@ class LiveMapper {
     mapper_type scratch(resolution_, model_, options_);
     scratch.map().set_memory_limit(memory_limit_);
     for (const std::size_t i : candidates) {
-      to_world(store_[i]);
+      WorldKeyframe w = to_world(store_[i]);
       // Only rays that can reach the region: the others change none of its voxels (one update
       // per voxel per scan, decided by the rays and end points in that voxel alone).
-      const RayReach ray(origin_, options_.max_range);
+      const RayReach ray(w.origin, options_.max_range);
       std::size_t kept = 0;
-      for (const Point3d& p : world_) {
+      for (const Point3d& p : w.points) {
         double lo[3], hi[3];
         if (!ray.extent(p, lo, hi)) continue;
         const BrickBox b = detail::brick_box<Key>(lo, hi, resolution_);
         if (!b.intersects(all)) continue;
         for (const BrickBox& r : region)
           if (b.intersects(r)) {
-            world_[kept++] = p;
+            w.points[kept++] = p;
             break;
           }
       }
-      world_.resize(kept);
-      insert(scratch, store_[i]);
+      w.points.resize(kept);
+      insert(scratch, store_[i], w);
     }
     last_.replayed = candidates.size();
     const map_type& from = scratch.map();
@@ -331,8 +336,6 @@ class LiveMapper {
   KeyframeStore<Pose> store_;
   std::size_t with_ids_ = 0, without_ids_ = 0;  // keyframes with points, by kind (k-NN model)
   LiveUpdate last_;
-  Point3d origin_;
-  std::vector<Point3d> world_;
 };
 
 }  // namespace knnocc

@@ -6,7 +6,6 @@
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -22,37 +21,6 @@
 #include "view_page.hpp"
 
 namespace knnocc::cli {
-
-/// Options of write_map_outputs(), for Args: valued options and flags.
-inline std::set<std::string> map_output_options() {
-  return {"--out-bt", "--out-ot", "--out-ply", "--out-png", "--out-html", "--up"};
-}
-inline std::set<std::string> map_output_flags() { return {"--ply-cubes", "--ply-free"}; }
-
-inline std::set<std::string> with_map_outputs(std::set<std::string> options) {
-  for (const auto& o : map_output_options()) options.insert(o);
-  return options;
-}
-inline std::set<std::string> with_map_output_flags(std::set<std::string> flags) {
-  for (const auto& f : map_output_flags()) flags.insert(f);
-  return flags;
-}
-
-inline const char* map_outputs_help() {
-  return R"(  --out-bt FILE         OctoMap binary tree (.bt) for octovis / octomap_server: occupied or
-                        free per voxel, pruned as OctoMap prunes
-  --out-ot FILE         OctoMap full tree (.ot): log-odds per node
-  --out-ply FILE        occupied voxel centres as a PLY point cloud (colour = height,
-                        property logodds) for CloudCompare / MeshLab
-  --ply-cubes           --out-ply writes one cube (8 vertices, 6 faces) per voxel instead
-  --ply-free            --out-ply includes free voxels (light grey)
-  --out-png FILE        a picture: top view (colour = height) above a side view, with legend,
-                        scale bar and title (zlib-compressed PNG)
-  --out-html FILE       the map in 3D in one self-contained web page (see knnocc view --help)
-  --up AXIS             which way is up in pictures and pages: x, y, z, -x, -y or -z
-                        (default: from the sensor poses, camera -y / LiDAR +z; z for map files)
-)";
-}
 
 inline std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
@@ -76,7 +44,14 @@ inline void check_map_outputs(const Args& args) {
     throw UsageError("--ply-cubes and --ply-free need --out-ply");
 }
 
-/// --up if given, else `estimated`.
+/// --voxels / --out-voxels' selection by name: occupied, free or all.
+inline io::VoxelSelection voxel_selection(const std::string& which) {
+  return which == "occupied" ? io::VoxelSelection::occupied
+         : which == "free"   ? io::VoxelSelection::free
+                             : io::VoxelSelection::all;
+}
+
+/// The model's name in titles and pictures.
 inline const char* model_title(const OctoMapModel&) { return "OctoMap model"; }
 inline const char* model_title(const KnnModel&) { return "k-NN model"; }
 inline const char* model_title(const RobustModel&) { return "robust model"; }
@@ -89,6 +64,7 @@ inline void print_written(const std::vector<std::string>& written) {
   std::printf("%s\n", line.c_str());
 }
 
+/// --up if given, else `estimated`.
 inline UpAxis up_axis(const Args& args, UpAxis estimated = {}) {
   return args.has("--up") ? parse_up_axis(args.str("--up")) : estimated;
 }

@@ -107,25 +107,6 @@ inline double& memory_limit_bytes() {
   return bytes;
 }
 
-/// Parses "2G", "512M", "1.5GB", "800000000" (decimal units K M G T, optional B); UsageError.
-inline double parse_memory_size(const std::string& option, const std::string& s) {
-  char* end = nullptr;
-  const double v = std::strtod(s.c_str(), &end);
-  std::string unit(end ? end : "");
-  for (char& c : unit) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  if (!unit.empty() && unit.back() == 'B') unit.pop_back();
-  const double scale = unit.empty()  ? 1
-                       : unit == "K" ? 1e3
-                       : unit == "M" ? 1e6
-                       : unit == "G" ? 1e9
-                       : unit == "T" ? 1e12
-                                     : 0;
-  if (s.empty() || end == s.c_str() || scale == 0 || !std::isfinite(v) || v * scale < 16e6)
-    throw UsageError(option + " expects a size of at least 16M such as 800M or 4G, got '" + s +
-                     "'");
-  return v * scale;
-}
-
 /// Makes `bytes` the process's address-space limit (never above the hard limit), so allocations
 /// past it fail as std::bad_alloc. Skipped in sanitizer builds.
 inline void apply_memory_limit(double bytes) {

@@ -1,4 +1,3 @@
-#pragma once
 // knnocc eval: a map against reference shapes (the paper's Table 1 metrics).
 
 #include <cmath>
@@ -17,26 +16,27 @@
 #include <knnocc/map/occupancy_map.hpp>
 
 #include "args.hpp"
-#include "map_outputs.hpp"  // lower_extension
+#include "commands.hpp"
+#include "common_options.hpp"
+#include "map_files.hpp"
 #include "resource_limits.hpp"
 
 namespace knnocc::cli {
 
-inline const char* eval_help() {
-  return R"(usage: knnocc eval --map FILE --reference FILE [--res R] [--inflate M] [--ground-band M]
-       knnocc eval --ids SEQ [--map FILE [--against FILE]] [--crop M] [--res R] [--min-views N]
-                   [--far M]
+namespace {
 
-Compares a map (an OctoMap .bt/.ot file, or a voxel list from `knnocc map --out-voxels`: x y z
-logodds per finest voxel, which needs --res; occupied = logodds >= 0) with reference shapes (`reference.txt` from `knnocc sim`: ground,
-ellipsoid and cuboid lines) and prints the paper's Table 1 metrics on one line:
+const char* kEvalText =
+    R"(Compares a map (an OctoMap .bt/.ot file, or a voxel list from `knnocc map --out-voxels`: x y z
+logodds per finest voxel, which needs --res; occupied = logodds >= 0) with reference shapes
+(`reference.txt` from `knnocc sim`: ground, ellipsoid and cuboid lines) and prints the paper's
+Table 1 metrics on one line:
   occupied N free N shell N in_shell N covered N irrelevant N evaluated N
   precision X shell_recall X free_inside N
   shell        voxels on the reference's boundary at resolution R
   in_shell     occupied voxels on the shell                  ("nodes in reference shell")
   covered      occupied voxels on the shell or inside it     ("nodes covered by reference")
-  irrelevant   occupied voxels farther than --inflate (0.3 m) from the shapes, not counting the
-               ground band (centres less than --ground-band, 0.3 m, above the ground)
+  irrelevant   occupied voxels farther than --inflate from the shapes, not counting the ground
+               band (centres less than --ground-band above the ground)
   evaluated    occupied voxels above the ground band; precision = 1 - irrelevant / evaluated
   shell_recall in_shell / shell
   free_inside  free voxels entirely inside a shape (space wrongly carved)
@@ -45,64 +45,88 @@ Without ground truth (--ids SEQ: a sequence folder whose clouds carry map-point 
 keyframes; --crop M keeps the points within M of their camera, as `knnocc map --crop`): prints
   map_points N seen_once F multiview_points N median_views V
 (seen_once: fraction of the distinct map points one keyframe alone observes; multiview: seen by
->= --min-views keyframes, default 3) and, with --map (a map of that sequence), the proxies
+>= --min-views keyframes) and, with --map (a map of that sequence), the proxies
   occupied N isolated N multiview N reference_kept N lost N free_multiview N far N
   isolated        occupied voxels without an occupied voxel among their 26 neighbours
   multiview       voxels holding a multi-view map point
   reference_kept  of those, occupied in the --against map (e.g. `--model octomap`'s; else 0)
   lost            of those, not occupied in --map
   free_multiview  multi-view voxels that are free in --map
-  far             occupied voxels farther than --far (0.3 m) from every multi-view voxel
+  far             occupied voxels farther than --far from every multi-view voxel
 )";
+
+CommandSpec make_eval_spec() {
+  const eval::MetricOptions m;
+  const eval::MultiviewOptions v;
+  CommandSpec s;
+  s.name = "eval";
+  s.summary = "compare a map with reference shapes (Table 1), or with a keyframe sequence's ids";
+  s.usage =
+      "knnocc eval --map FILE --reference FILE [--res R] [--inflate M] [--ground-band M]\n"
+      "       knnocc eval --ids SEQ [--map FILE [--against FILE]] [--crop M] [--res R] "
+      "[--min-views N]\n"
+      "                   [--far M]";
+  s.text = kEvalText;
+  s.groups.push_back(
+      {"options",
+       {Option::text("--map", "FILE", "the map: .bt, .ot, or a voxel list (needs --res)"),
+        Option::number("--res", "R", "voxel edge of a voxel-list map; a tree's must equal it")
+            .alias("-r")
+            .at_least(kMinResolution),
+        Option::text("--reference", "FILE", "reference shapes (`knnocc sim`'s reference.txt)"),
+        Option::number("--inflate", "M",
+                       "occupied voxels farther than M from the shapes are "
+                       "irrelevant")
+            .fallback(format_number(m.inflate))
+            .at_least(0),
+        Option::number("--ground-band", "M",
+                       "occupied voxels less than M above the ground are "
+                       "not counted")
+            .fallback(format_number(m.ground_band))
+            .at_least(0),
+        memory_limit_option()},
+       ""});
+  s.groups.push_back(
+      {"without ground truth (--ids)",
+       {Option::text("--ids", "SEQ", "a sequence folder whose clouds carry map-point ids"),
+        Option::text("--against", "FILE", "a second map of the sequence (reference_kept)"),
+        Option::number("--crop", "M", "keep the points within M of their camera")
+            .fallback_text("no crop")
+            .above(0),
+        Option::integer("--min-views", "N", "keyframes that make a map point multi-view")
+            .fallback(std::to_string(v.min_views))
+            .at_least(1)
+            .at_most(1000),
+        Option::number("--far", "M", "occupied voxels farther than M from every multi-view voxel")
+            .fallback(format_number(v.far))
+            .at_least(0)},
+       ""});
+  return s;
 }
 
-// A voxel list as a map at resolution res; every line must be a voxel centre of that grid.
-inline OccupancyMap<OcKey> read_voxel_map(const std::string& path, double res) {
-  OccupancyMap<OcKey> map(res);
-  for (const io::VoxelRecord& v : io::read_voxel_list(path)) {
-    OcKey k;
-    if (!map.grid().coord_to_key(v.x, v.y, v.z, k) ||
-        std::fabs(map.grid().index_to_coord(k[0]) - v.x) > 1e-3 * res ||
-        std::fabs(map.grid().index_to_coord(k[1]) - v.y) > 1e-3 * res ||
-        std::fabs(map.grid().index_to_coord(k[2]) - v.z) > 1e-3 * res) {
-      char text[160];
-      std::snprintf(text, sizeof text,
-                    "(%.6f %.6f %.6f) is not a voxel centre at --res %g (wrong --res?)", v.x, v.y,
-                    v.z, res);
-      throw io::Error(path, text);
-    }
-    map.set(k, v.logodds);
-  }
-  return map;
+}  // namespace
+
+const CommandSpec& eval_spec() {
+  static const CommandSpec spec = make_eval_spec();
+  return spec;
 }
+
+namespace {
 
 // A map file (tree, or voxel list at --res).
-inline OccupancyMap<OcKey> read_map(const Args& args, const std::string& path) {
-  const std::string ext = lower_extension(path);
-  const bool tree = ext == ".bt" || ext == ".ot";
-  if (!tree && !args.has("--res"))
+OccupancyMap<OcKey> read_map(const Args& args, const std::string& path) {
+  if (!is_tree_file(path) && !args.has("--res"))
     throw UsageError("--res is required for a voxel list (the map's voxel size)");
-  const double res = args.number("--res", 0.0);
-  if (args.has("--res") && !(res >= 1e-4))
-    throw UsageError("--res must be >= 0.0001, got " + args.str("--res"));
-  OccupancyMap<OcKey> map = tree ? read_tree_checked(path) : read_voxel_map(path, res);
-  if (tree && args.has("--res") && map.grid().resolution() != res)
-    throw io::Error(path, "the tree's resolution is " + std::to_string(map.grid().resolution()) +
-                              ", not --res " + args.str("--res"));
-  return map;
+  return read_map_file(path, args.number("--res", 0.0));
 }
 
 // knnocc eval --ids: quality without ground truth (eval/multiview.hpp).
-inline int run_eval_ids(const Args& args) {
+int run_eval_ids(const Args& args) {
   const std::string seq_path = args.str("--ids");
   const double crop = args.number("--crop", -1.0);
-  if (args.has("--crop") && !(crop > 0)) throw UsageError("--crop must be > 0");
   eval::MultiviewOptions opt;
-  const long views = args.integer("--min-views", opt.min_views);
-  if (views < 1 || views > 1000) throw UsageError("--min-views must be in [1, 1000]");
-  opt.min_views = static_cast<std::uint32_t>(views);
-  opt.far = args.number("--far", opt.far);
-  if (!(opt.far >= 0)) throw UsageError("--far must be >= 0");
+  opt.min_views = static_cast<std::uint32_t>(args.integer("--min-views"));
+  opt.far = args.number("--far");
   const io::Sequence seq = io::Sequence::open(seq_path);
   eval::MapPointViews mpv;
   std::vector<Point3d> world;
@@ -133,23 +157,16 @@ inline int run_eval_ids(const Args& args) {
   return 0;
 }
 
-inline int run_eval(const std::vector<std::string>& argv) {
-  const Args args(argv,
-                  {"--map", "--reference", "--res", "--inflate", "--ground-band", "--ids",
-                   "--against", "--crop", "--min-views", "--far"},
-                  {});
-  if (args.help()) {
-    std::fputs(eval_help(), stdout);
-    return 0;
-  }
+}  // namespace
+
+int run_eval(const Args& args) {
+  use_memory_limit(args);
   if (args.has("--ids")) return run_eval_ids(args);
   const std::string map_path = args.required("--map");
   const std::string ref_path = args.required("--reference");
   eval::MetricOptions opt;
-  opt.inflate = args.number("--inflate", opt.inflate);
-  opt.ground_band = args.number("--ground-band", opt.ground_band);
-  if (!(opt.inflate >= 0) || !(opt.ground_band >= 0))
-    throw UsageError("--inflate and --ground-band must be >= 0");
+  opt.inflate = args.number("--inflate");
+  opt.ground_band = args.number("--ground-band");
   const eval::Reference ref = eval::read_reference(ref_path);
   const OccupancyMap<OcKey> map = read_map(args, map_path);
   const eval::Metrics m = eval::evaluate(map, ref, opt);

@@ -220,7 +220,7 @@ io::Cloud read_cloud(const std::string& in) {
 }
 
 int convert_cloud(const ConvertJob& j) {
-  const io::Cloud cloud = read_cloud(j.in);
+  const io::Cloud cloud = reading(j.in, [&] { return read_cloud(j.in); });
   const std::vector<std::uint64_t>* ids = cloud.ids.empty() ? nullptr : &cloud.ids;
   if (j.out_ext == ".ply")
     io::write_ply(j.out, cloud.points, ids, j.encoding != "ascii");
@@ -242,7 +242,9 @@ int run_convert(const Args& args) {
   use_memory_limit(args);
   if (!j.map_in) return convert_cloud(j);
   const OccupancyMap<OcKey> map =
-      j.voxel_list_in ? read_voxel_list_map(j.in, args.number("--res")) : read_map_file(j.in, 0.0);
+      j.voxel_list_in
+          ? reading(j.in, [&] { return read_voxel_list_map(j.in, args.number("--res")); })
+          : read_map_file(j.in, 0.0);
   const auto c = map.count_voxels();
   std::printf("map %zu voxels (occupied %zu, free %zu)\n", c.known(), c.occupied, c.free);
   write_converted_map(map, j, args);

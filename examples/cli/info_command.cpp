@@ -170,10 +170,12 @@ int run_info(const Args& args) {
   use_memory_limit(args);
   const std::string path = args.positional()[0];
   std::printf("file: %s\n", path.c_str());
-  if (is_tree_file(path)) return info_tree(path);
-  const io::ScanSource source = io::ScanSource::open(path);
-  if (std::string(source.kind()) == "point file") return info_point_file(path, source);
-  return info_scans(source);
+  return reading(path, [&] {
+    if (is_tree_file(path)) return info_tree(path);
+    const io::ScanSource source = io::ScanSource::open(path);
+    if (std::string(source.kind()) == "point file") return info_point_file(path, source);
+    return info_scans(source);
+  });
 }
 
 }  // namespace knnocc::cli

@@ -216,7 +216,7 @@ template <class Model>
 std::unique_ptr<Mapper<Model>> make_mapper(const MapOptions& opt, const Model& model) {
   const MapperOptions mo{opt.max_range, opt.discretize, opt.threads, {}};
   if (opt.init_map.empty()) return std::make_unique<Mapper<Model>>(opt.res, model, mo);
-  OccupancyMap<OcKey> init = io::read_octree(opt.init_map);
+  OccupancyMap<OcKey> init = read_tree_checked(opt.init_map);
   if (opt.res > 0 && std::abs(init.grid().resolution() - opt.res) > 1e-12 * opt.res)
     throw io::Error(opt.init_map, "resolution " + std::to_string(init.grid().resolution()) +
                                       " differs from --res " + std::to_string(opt.res));

@@ -50,7 +50,7 @@ inline bool is_tree_file(const std::string& path) {
 /// A tree, or a voxel list at `res` (> 0); a tree whose resolution differs from a given `res`
 /// (> 0) is refused.
 inline OccupancyMap<OcKey> read_map_file(const std::string& path, double res) {
-  if (!is_tree_file(path)) return read_voxel_list_map(path, res);
+  if (!is_tree_file(path)) return reading(path, [&] { return read_voxel_list_map(path, res); });
   OccupancyMap<OcKey> map = read_tree_checked(path);
   if (res > 0 && map.grid().resolution() != res) {
     char text[160];

@@ -189,6 +189,18 @@ case "$CASE" in
     printf 'FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nVIEWPOINT 0 0 0 2 0 0 0\nDATA ascii\n1 0 0\n' > vp.pcd
     expect 2 "vp.pcd: VIEWPOINT quaternion norm 2.000000 is not 1" "$K" map --input vp.pcd --res 0.1
     expect 2 "vp.pcd: VIEWPOINT quaternion norm 2.000000 is not 1" "$K" info vp.pcd ;;
+  memory_big_tree)  # a .bt whose one leaf covers 2^30 voxels: every command that loads a map
+    # refuses it under a small limit, naming the file and --memory-limit (root and 4 inner nodes
+    # with child 0 inner, the depth-5 node with child 0 an occupied leaf at depth 6)
+    printf '# Octomap OcTree binary file\nid OcTree\nsize 7\nres 0.1\ndata\n\x03\x00\x03\x00\x03\x00\x03\x00\x03\x00\x02\x00' > big.bt
+    msg="big.bt: the tree's 1073741824 voxels need at least .* more than the map's share .* of --memory-limit 100 MB"
+    expect 2 "$msg" "$K" convert big.bt out.ot --memory-limit 100M
+    expect 2 "$msg" "$K" view big.bt -o page.html --memory-limit 100M
+    printf 'ground 0\n' > ref.txt
+    expect 2 "$msg" "$K" eval --map big.bt --reference ref.txt --memory-limit 100M
+    expect 2 "$msg" "$K" map --input p.xyz --init-map big.bt --memory-limit 100M --out-ot x.ot
+    [ ! -e out.ot ] && [ ! -e page.html ] && [ ! -e x.ot ] || fail "an output was written"
+    no_temporaries ;;
   *) fail "unknown case $CASE" ;;
 esac
 echo PASS

@@ -113,9 +113,9 @@ inline void remove_temporaries_on_signal() {
   }
 }
 
-/// Writes to a new, uniquely named temporary file beside <path> (created exclusively, so a
+/// Writes to a new, uniquely named temporary file beside `path` (created exclusively, so a
 /// user's file is never taken over and concurrent writers of one path never share a file) and
-/// renames it over <path> on commit(): readers never see a half-written file. Without commit()
+/// renames it over `path` on commit(): readers never see a half-written file. Without commit()
 /// (e.g. an exception) the temporary is removed. A target that exists and is not a regular file
 /// (a device such as /dev/null, a FIFO) is written directly, never replaced; a symbolic link is
 /// followed, so the file it names is replaced and the link stays. A new file gets the usual
@@ -249,8 +249,8 @@ class CommitGroup : public detail::CommitGroupBase {
   detail::CommitGroupBase* outer_;
 };
 
-/// A folder output built aside: files go into a fresh folder "<dir>.tmp-XXXXXX" beside <dir>
-/// (path()), and commit() renames it to <dir>. <dir> must not exist or be an empty folder
+/// A folder output built aside: files go into a fresh folder "`dir`.tmp-XXXXXX" beside `dir`
+/// (path()), and commit() renames it to `dir`. `dir` must not exist or be an empty folder
 /// (replaced), or a folder the `replaceable` predicate accepts (moved aside, and removed once the
 /// new folder is in place); any other non-empty folder is refused in the constructor, before any
 /// work. Without commit()
@@ -324,7 +324,7 @@ class StagingDir {
     tmp_.reset();
   }
 
-  /// Throws unless <dir> is absent, an empty folder, or a folder `replaceable` accepts.
+  /// Throws unless `dir` is absent, an empty folder, or a folder `replaceable` accepts.
   static void check_target(const std::string& dir, Replaceable replaceable = nullptr) {
     namespace fs = std::filesystem;
     std::error_code ec;

@@ -1,4 +1,4 @@
-// The bad-input matrix (README "Defined behaviour on bad data"), through the public Mapper with
+// The bad-input matrix (docs/reliability.md, "Defined behaviour on bad data"), through the public Mapper with
 // both sensor models: each row's defined behaviour, asserted.
 
 #include <doctest/doctest.h>

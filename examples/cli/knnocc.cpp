@@ -77,13 +77,15 @@ int main(int argc, char** argv) {
       std::printf("knnocc %s\n", KNNOCC_VERSION_STRING);
       rc = 0;
     } else {
-      std::fprintf(stderr, "knnocc: unknown command '%s' (see knnocc --help)\n", command.c_str());
+      std::fprintf(stderr, "knnocc: unknown command '%s' (see knnocc --help)\n",
+                   knnocc::io::printable(command).c_str());
       return 2;
     }
     knnocc::cli::check_stdout();  // output lost on a full disk or /dev/full fails the command
     return rc;
   } catch (const knnocc::cli::UsageError& e) {
-    std::fprintf(stderr, "knnocc %s: %s\n", command.c_str(), e.what());
+    std::fprintf(stderr, "knnocc %s: %s\n", command.c_str(),
+                 knnocc::io::printable(e.what()).c_str());
   } catch (const knnocc::io::Error& e) {
     std::fprintf(stderr, "knnocc %s: %s\n", command.c_str(), e.what());
   } catch (const std::bad_alloc&) {
@@ -93,7 +95,8 @@ int main(int argc, char** argv) {
                  command.c_str(),
                  knnocc::cli::format_bytes(knnocc::cli::memory_limit_bytes()).c_str());
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "knnocc %s: %s\n", command.c_str(), e.what());
+    std::fprintf(stderr, "knnocc %s: %s\n", command.c_str(),
+                 knnocc::io::printable(e.what()).c_str());
   }
   return 2;
 }

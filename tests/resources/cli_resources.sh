@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Resource and output probes of the knnocc tool, one case per ctest test:
+# Resource, output and bad-data probes of the knnocc tool, one case per ctest test:
 #   cli_resources.sh TOOL WORK_DIR CASE
 # Each case builds its inputs, runs the tool as a user would and checks the exit status, the
 # one-line message and which files exist afterwards. Exit 0 = pass.
@@ -189,6 +189,18 @@ case "$CASE" in
     printf 'FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nVIEWPOINT 0 0 0 2 0 0 0\nDATA ascii\n1 0 0\n' > vp.pcd
     expect 2 "vp.pcd: VIEWPOINT quaternion norm 2.000000 is not 1" "$K" map --input vp.pcd --res 0.1
     expect 2 "vp.pcd: VIEWPOINT quaternion norm 2.000000 is not 1" "$K" info vp.pcd ;;
+  control_bytes_escaped)  # bytes of a file reach the terminal escaped, a NUL does not cut the line
+    printf '# Octomap OcTree binary file\nid Oc\033[2JTree\000X\nsize 0\nres 0.1\ndata\n' > esc.bt
+    expect 2 "esc.bt: unsupported OctoMap tree type 'Oc\\\\x1b\[2JTree\\\\x00X' \(supported" "$K" info esc.bt
+    ! grep -q $'\033' err.txt || fail "a raw ESC byte on stderr"
+    printf 'ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\033]0;t\007\nproperty float x\033]0;t\007\nend_header\n' > esc.ply
+    expect 2 "esc.ply: PLY header line 5: duplicate property 'x\\\\x1b\]0;t\\\\x07' in element 'vertex'" \
+      "$K" map --input esc.ply --res 0.1
+    "$K" sim --out seq --seed 3 --keyframes 4 > /dev/null || fail "sim"
+    mkdir corr && printf '0 0 0 0 0 0 0 1\033[1m\n' > corr/after_000000.txt
+    expect 2 "corr/after_000000.txt: line 1: cannot parse '1\\\\x1b\[1m' as a number" \
+      "$K" map --input seq --corrections corr --res 0.1
+    ! grep -q $'\033' err.txt || fail "a raw ESC byte on stderr" ;;
   *) fail "unknown case $CASE" ;;
 esac
 echo PASS

@@ -129,8 +129,9 @@ TEST_CASE("bad_input: max range 0 or NaN is rejected, negative means no limit") 
   CHECK(ks.scan.beyond_max_range == 0);
 }
 
-TEST_CASE("bad_input: resolution <= 0, NaN, Inf or absurdly small is a clear error") {
-  for (const double r : {0.0, -0.1, kNaN, kInf, 1e-7, 1e-320}) {
+TEST_CASE("bad_input: resolution <= 0, NaN, Inf, absurdly small or large is a clear error") {
+  // 1e35: 32768 voxels of it pass float's range, so no voxel centre could be a float point.
+  for (const double r : {0.0, -0.1, kNaN, kInf, 1e-7, 1e-320, 1e35, 1e308}) {
     CAPTURE(r);
     try {
       OccupancyMap<OcKey> map(r);
@@ -140,6 +141,8 @@ TEST_CASE("bad_input: resolution <= 0, NaN, Inf or absurdly small is a clear err
     }
   }
   CHECK_NOTHROW(OccupancyMap<OcKey>(1e-6));
+  CHECK_NOTHROW(OccupancyMap<OcKey>(1e34));
+  CHECK_THROWS_AS(OccupancyMap<WideKey>(1e34), std::invalid_argument);  // 64x the keys
 }
 
 TEST_CASE("bad_input: a pose quaternion off unit length is normalised (<= 1e-3) or rejected") {

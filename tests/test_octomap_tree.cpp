@@ -201,6 +201,16 @@ TEST_CASE("octomap_tree.malformed files throw io::Error naming the file") {
   expect_error("no_res.ot", replace(good_ot, "res 0.05\n", ""), "no 'res' line");
   expect_error("zero_res.bt", replace(good_bt, "res 0.05", "res 0"), "invalid resolution");
   expect_error("nan_res.bt", replace(good_bt, "res 0.05", "res nan"), "invalid resolution");
+  // Finite, but a map cannot hold it: voxel centres would overflow float (a page of -inf, a
+  // PLY of inf points), or the voxels are below the 1e-6 m a Grid takes.
+  expect_error("huge_res.bt", replace(good_bt, "res 0.05", "res 1e308"),
+               "resolution 1e+308 is above 1.03846e+34 m: the key range");
+  expect_error("huge_res.ot", replace(good_ot, "res 0.05", "res 2e34"), "the key range");
+  expect_error("tiny_res.bt", replace(good_bt, "res 0.05", "res 1e-9"),
+               "resolution 1e-09 is below 1e-06 m");
+  // A control byte or a NUL in a header word is shown escaped, and the message goes on.
+  expect_error("escape_id.ot", replace(good_ot, "id OcTree", std::string("id Oc\x1b[2J\0Tree", 14)),
+               "'Oc\\x1b[2J\\x00Tree'");
   expect_error("text_size.bt", replace(good_bt, "size ", "size x"), "invalid node count");
   expect_error("huge_size.bt", replace(good_bt, "size ", "size 9"), "but the tree has");
   expect_error("bad_id.ot", replace(good_ot, "id OcTree", "id CountingOcTree"),

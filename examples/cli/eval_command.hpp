@@ -87,7 +87,8 @@ inline OccupancyMap<OcKey> read_map(const Args& args, const std::string& path) {
     throw UsageError("--res must be >= 0.0001, got " + args.str("--res"));
   OccupancyMap<OcKey> map = tree ? read_tree_checked(path) : read_voxel_map(path, res);
   if (tree && args.has("--res") && map.grid().resolution() != res)
-    throw io::Error(path, "the tree's resolution is " + std::to_string(map.grid().resolution()) +
+    throw io::Error(path, "the tree's resolution is " +
+                              io::detail::round_trip_text(map.grid().resolution()) +
                               ", not --res " + args.str("--res"));
   return map;
 }

@@ -153,10 +153,11 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   const MapperOptions mo{opt.max_range, opt.discretize, opt.threads, {}};
   std::unique_ptr<Mapper<Model>> owned;
   if (!opt.init_map.empty()) {
-    OccupancyMap<OcKey> init = io::read_octree(opt.init_map);
+    OccupancyMap<OcKey> init = read_tree_checked(opt.init_map);
     if (opt.res > 0 && std::abs(init.grid().resolution() - opt.res) > 1e-12 * opt.res)
-      throw io::Error(opt.init_map, "resolution " + std::to_string(init.grid().resolution()) +
-                                        " differs from --res " + std::to_string(opt.res));
+      throw io::Error(opt.init_map,
+                      "resolution " + io::detail::round_trip_text(init.grid().resolution()) +
+                          " differs from --res " + io::detail::round_trip_text(opt.res));
     if (lower_extension(opt.init_map) == ".bt")
       std::fprintf(stderr,
                    "knnocc map: %s: a .bt holds only occupied/free; continuing from clamped "

@@ -10,6 +10,7 @@
 
 #include "args.hpp"
 #include "convert_command.hpp"
+#include "resource_limits.hpp"
 #include "view_page.hpp"
 
 namespace knnocc::cli {
@@ -73,7 +74,7 @@ inline int run_view(const std::vector<std::string>& argv) {
   for (const std::string& in : args.positional()) {
     const std::string ext = lower_extension(in);
     if (ext == ".bt" || ext == ".ot") {
-      maps.push_back(io::read_octree(in));
+      maps.push_back(read_tree_checked(in));
     } else if (ext == ".voxels" || ext == ".txt") {
       if (!args.has("--res")) throw UsageError("the voxel list " + in + " needs --res");
       const double res = args.number("--res", 0.0);

@@ -252,5 +252,16 @@ inline char* format_float_roundtrip(char* buf, char* buf_end, float v) {
   return buf + (n > 0 ? std::min<std::ptrdiff_t>(n, buf_end - buf - 1) : 0);
 }
 
+// The shortest "%g" text that reads back to the same double (for messages that compare values:
+// 0.1 and 0.1000001 must not both print as 0.100000).
+inline std::string round_trip_text(double v) {
+  char text[32];
+  for (int digits = 1; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, v);
+    if (std::strtod(text, nullptr) == v) break;
+  }
+  return text;
+}
+
 }  // namespace detail
 }  // namespace knnocc::io

@@ -10,9 +10,11 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <string>
 
+#include "../../core/grid.hpp"
 #include "../error.hpp"
 #include "bytes.hpp"
 #include "file_text.hpp"
@@ -88,6 +90,18 @@ inline OctreeHeader parse_octree_header(const std::string& path, const char* dat
       if (!parse_real_token(b, ve, h.resolution) || !(h.resolution > 0.0) ||
           !std::isfinite(h.resolution) || !std::isfinite(1.0 / h.resolution)) {
         throw Error(path, at + "invalid resolution " + quote_token(b, ve));
+      }
+      if (h.resolution < Grid<OcKey>::min_resolution ||
+          h.resolution > Grid<OcKey>::max_resolution) {
+        const bool small = h.resolution < Grid<OcKey>::min_resolution;
+        char text[160];
+        std::snprintf(text, sizeof text,
+                      small ? "resolution %g is below %g m, the finest a map takes"
+                            : "resolution %g is above %g m: the key range (+-32768 voxels) "
+                              "would not fit a float",
+                      h.resolution,
+                      small ? Grid<OcKey>::min_resolution : Grid<OcKey>::max_resolution);
+        throw Error(path, at + text);
       }
       have_res = true;
     } else {

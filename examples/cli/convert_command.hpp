@@ -20,6 +20,7 @@
 #include <knnocc/io/xyz.hpp>
 
 #include "args.hpp"
+#include "input_guard.hpp"
 #include "map_outputs.hpp"
 #include "output_set.hpp"
 #include "progress.hpp"
@@ -99,6 +100,7 @@ inline int run_convert(const std::vector<std::string>& argv) {
   const std::string in = args.positional()[0], out = args.positional()[1];
   const std::string in_ext = lower_extension(in), out_ext = lower_extension(out);
   check_outputs({{"OUT", out}});
+  check_outputs_not_inputs({{"OUT", out}}, {{"IN", in}});
   const std::string encoding = args.str("--encoding", "binary");
   if (encoding != "ascii" && encoding != "binary" && encoding != "binary_compressed")
     throw UsageError("--encoding must be ascii, binary or binary_compressed, got '" + encoding +

@@ -17,6 +17,7 @@
 #include <knnocc/sensor/robust_model.hpp>
 
 #include "args.hpp"
+#include "input_guard.hpp"
 #include "live_corrections.hpp"
 #include "map_outputs.hpp"
 #include "output_set.hpp"
@@ -79,6 +80,8 @@ options:
                         0..NNNNNN (poses.txt format) known after keyframe NNNNNN, applied then;
                         the map stays equal to mapping with the final poses (sequence folders;
                         prints `corrections N reposed_keyframes N median_ms X max_ms X`)
+outputs are never inputs: an output that is an input file (links count) or lies inside an input
+folder (the sequence, DIR) is refused before any work
 k-NN model (--model knn): the map point cloud is the union of the keyframes (clouds with an `id`
 property: ORB-SLAM map points, each joins once; without ids every point is a new map point);
 s_p = mean distance of p to its k nearest map points; the valid s_p (< s-limit) form N(mu, sigma).
@@ -319,8 +322,11 @@ inline int run_map(const std::vector<std::string>& argv) {
     return 0;
   }
   check_map_outputs(args);
-  check_outputs(requested_outputs(
-      args, {"--out-voxels", "--out-bt", "--out-ot", "--out-ply", "--out-png", "--out-html"}));
+  const OutputList files = requested_outputs(
+      args, {"--out-voxels", "--out-bt", "--out-ot", "--out-ply", "--out-png", "--out-html"});
+  check_outputs(files);
+  check_outputs_not_inputs(files,
+                           requested_inputs(args, {"--input", "--init-map", "--corrections"}));
   const std::string input = args.required("--input");
   if (!args.has("--res") && !args.has("--init-map"))
     throw UsageError("--res is required (see --help)");

@@ -13,6 +13,7 @@
 #include <knnocc/knn/tracker.hpp>
 
 #include "args.hpp"
+#include "input_guard.hpp"
 #include "output_set.hpp"
 #include "progress.hpp"
 
@@ -54,7 +55,9 @@ int run_track_with(const Args& args, const Policy& policy) {
   const double max_range = args.number("--max-range", -1.0);
   if (args.has("--max-range") && !(max_range > 0.0)) throw UsageError("--max-range must be > 0");
   const std::string stats_path = args.required("--out-stats");
-  check_outputs(requested_outputs(args, {"--out-stats", "--out-s"}));
+  const OutputList files = requested_outputs(args, {"--out-stats", "--out-s"});
+  check_outputs(files);
+  check_outputs_not_inputs(files, {{"--input", input}});
 
   const auto seq = io::Sequence::open(input);
   KnnTracker<Policy> tracker(params, policy);

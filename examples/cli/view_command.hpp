@@ -10,10 +10,14 @@
 
 #include "args.hpp"
 #include "convert_command.hpp"
+#include "input_guard.hpp"
 #include "resource_limits.hpp"
 #include "view_page.hpp"
 
 namespace knnocc::cli {
+
+/// The most maps one page shows (each has its button and its data in the page).
+inline constexpr std::size_t kMaxViewMaps = 64;
 
 inline const char* view_help() {
   return R"(usage: knnocc view MAP... --out PAGE.html [options]
@@ -26,7 +30,7 @@ Only the faces between an occupied and a non-occupied cell are drawn; a map with
 faces than --max-faces is drawn at a coarser level (cells of 2, 4, ... voxels, occupied when
 any voxel in them is), and the page says so.
   MAP                   .bt or .ot (OctoMap trees), or a voxel list (x y z logodds per line, as
-                        --out-voxels writes) named .voxels or .txt, which needs --res
+                        --out-voxels writes) named .voxels or .txt, which needs --res; up to 64
   -o, --out FILE        the page to write (required)
   --names A,B,...       the maps' names on the page (default: the file names)
   --up AXIS             up: x, y, z, -x, -y or -z (default z: map files hold no poses)
@@ -37,13 +41,20 @@ Prints `wrote FILE (N maps)`. Exit status 2 on bad input (one line naming the fi
 }
 
 inline int run_view(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--out", "--names", "--up", "--res", "--max-faces"}, {}, 64);
+  const Args args(argv, {"--out", "--names", "--up", "--res", "--max-faces"}, {}, argv.size());
   if (args.help()) {
     std::fputs(view_help(), stdout);
     return 0;
   }
   if (args.positional().empty()) throw UsageError("needs at least one MAP (see --help)");
+  if (args.positional().size() > kMaxViewMaps)
+    throw UsageError("at most " + std::to_string(kMaxViewMaps) + " maps fit one page, got " +
+                     std::to_string(args.positional().size()));
   const std::string out = args.required("--out");
+  OutputList inputs;
+  for (const std::string& in : args.positional()) inputs.emplace_back("MAP", in);
+  check_outputs({{"--out", out}});
+  check_outputs_not_inputs({{"--out", out}}, inputs);
   const UpAxis up = args.has("--up") ? parse_up_axis(args.str("--up")) : UpAxis{};
   ViewOptions opt;
   const long faces = args.integer("--max-faces", static_cast<long>(opt.max_faces));

@@ -10,7 +10,8 @@ if(TARGET knnocc_tool AND KNNOCC_BASH)
     sim_non_empty_folder sigterm_removes_temporaries threads_capped huge_ply_header
     huge_pcd_header memory_far_rays memory_tiny_resolution memory_long_fine_rays memory_out_of_memory memory_broken_compressed memory_corrections
     bad_memory_limit
-    missing_input velodyne_without_calib utf8_bom_accepted mixed_ids_name_the_file info_like_map control_bytes_escaped)
+    missing_input velodyne_without_calib utf8_bom_accepted mixed_ids_name_the_file info_like_map
+    output_is_input control_bytes_escaped)
   foreach(_case IN LISTS KNNOCC_RESOURCE_CASES)
     add_test(NAME cli.resources.${_case}
       COMMAND "${KNNOCC_BASH}" "${CMAKE_CURRENT_LIST_DIR}/cli_resources.sh"

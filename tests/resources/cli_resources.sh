@@ -189,6 +189,44 @@ case "$CASE" in
     printf 'FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nVIEWPOINT 0 0 0 2 0 0 0\nDATA ascii\n1 0 0\n' > vp.pcd
     expect 2 "vp.pcd: VIEWPOINT quaternion norm 2.000000 is not 1" "$K" map --input vp.pcd --res 0.1
     expect 2 "vp.pcd: VIEWPOINT quaternion norm 2.000000 is not 1" "$K" info vp.pcd ;;
+  output_is_input)  # an output that is an input, or lies in an input folder: one line, nothing written
+    "$K" sim --out seq --seed 3 --keyframes 12 --drift 0.3 > /dev/null || fail "sim"
+    "$K" map --input p.xyz --res 0.1 --out-bt small.bt --out-ply a.ply > /dev/null || fail "map"
+    ln -s small.bt link.bt && ln small.bt hard.bt && ln -s seq seqlink && mkdir corr lseq
+    cp seq/corrections/* corr/ && cp -r seq/poses.txt lseq/ && mkdir lseq/clouds
+    for f in seq/clouds/*; do ln -s "$PWD/$f" lseq/clouds/; done  # clouds linked in from seq
+    inputs() { find seq corr lseq small.bt a.ply p.xyz -exec md5sum {} + 2> /dev/null | sort; }
+    before=$(inputs)
+    expect 2 "^knnocc view: small.bt: --out would replace an input \('small.bt' of MAP\); nothing was written$" \
+      "$K" view small.bt -o small.bt
+    expect 2 "link.bt: --out would replace an input \('small.bt' of MAP\)" "$K" view small.bt -o link.bt
+    expect 2 "hard.bt: OUT would replace an input \('small.bt' of IN\)" "$K" convert small.bt hard.bt
+    expect 2 "a.ply: --out-ply would replace an input \('a.ply' of --input\)" \
+      "$K" map --input a.ply --res 0.1 --out-ply a.ply
+    expect 2 "seq/poses.txt: --out-voxels would replace an input \('seq/poses.txt' of --input\)" \
+      "$K" map --input seq --res 0.1 --out-voxels seq/poses.txt
+    expect 2 "seq/map.bt: --out-bt lies inside an input folder \('seq' of --input\)" \
+      "$K" map --input seq --res 0.1 --out-voxels v.txt --out-bt seq/map.bt
+    expect 2 "seqlink/clouds/new.ply: --out-ply lies inside an input folder \('seq/clouds' of --input\)" \
+      "$K" map --input seq --res 0.1 --out-ply seqlink/clouds/new.ply
+    expect 2 "seq/clouds/000003.ply: --out-ply would replace an input \('lseq/clouds/000003.ply' of --input\)" \
+      "$K" map --input lseq --res 0.1 --out-ply seq/clouds/000003.ply
+    expect 2 "seq/corrections/after_000009.txt: --out-voxels would replace an input" \
+      "$K" map --input seq --corrections seq/corrections --res 0.1 --out-voxels seq/corrections/after_000009.txt
+    expect 2 "corr/new.txt: --out-voxels lies inside an input folder \('corr' of --corrections\)" \
+      "$K" map --input seq --corrections corr --res 0.1 --out-voxels corr/new.txt
+    expect 2 "small.bt: --out-bt would replace an input \('small.bt' of --init-map\)" \
+      "$K" map --input p.xyz --init-map small.bt --out-bt small.bt
+    expect 2 "seq/clouds/000001.ply: --out-stats would replace an input \('seq/clouds/000001.ply' of --input\)" \
+      "$K" track --input seq --k 3 --out-stats seq/clouds/000001.ply
+    expect 2 "seq/s.txt: --out-s lies inside an input folder" "$K" track --input seq --k 3 --out-stats s.txt --out-s seq/s.txt
+    [ "$(inputs)" = "$before" ] || fail "an input changed"
+    for f in v.txt seq/map.bt seq/clouds/new.ply corr/new.txt s.txt seq/s.txt; do
+      [ ! -e "$f" ] || fail "$f written"
+    done
+    [ -z "$(find . -name '*.tmp-*')" ] || fail "temporaries left: $(find . -name '*.tmp-*')"
+    expect 0 "" "$K" map --input seq --res 0.1 --out-bt seq.bt  # beside the folder: written
+    [ -s seq.bt ] || fail "seq.bt not written" ;;
   control_bytes_escaped)  # bytes of a file reach the terminal escaped, a NUL does not cut the line
     printf '# Octomap OcTree binary file\nid Oc\033[2JTree\000X\nsize 0\nres 0.1\ndata\n' > esc.bt
     expect 2 "esc.bt: unsupported OctoMap tree type 'Oc\\\\x1b\[2JTree\\\\x00X' \(supported" "$K" info esc.bt

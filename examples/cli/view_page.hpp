@@ -20,6 +20,7 @@
 #include <knnocc/io/error.hpp>
 #include <knnocc/map/occupancy_map.hpp>
 
+#include "sha256.hpp"
 #include "view_frame.hpp"
 #include "view_page_script.hpp"
 
@@ -140,6 +141,18 @@ inline std::string json_string(const std::string& s) {
   return o + "\"";
 }
 
+/// A meta element that lets the page run its own inline scripts (by their SHA-256) and nothing
+/// else: no other script, no event handler attribute, no network, no plugin; inline styles stay.
+inline std::string content_security_policy(const std::vector<std::string>& scripts) {
+  std::string sources;
+  for (const std::string& s : scripts) {
+    const auto digest = sha256(s);
+    sources += " 'sha256-" + base64(std::string(digest.begin(), digest.end())) + "'";
+  }
+  return "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; script-src" +
+         sources + "; style-src 'unsafe-inline'; base-uri 'none'; form-action 'none'\">\n";
+}
+
 }  // namespace detail
 
 /// The whole page for `maps` (at least one, each with an occupied voxel).
@@ -239,15 +252,18 @@ inline std::string view_page_html(const std::vector<ViewMap>& maps, UpAxis up,
                 "\"heightHi\":%.6g,\"maxFaces\":%zu,\"maps\":[\n",
                 up.name().c_str(), axis_name(vf.axis[0], vf.sign[0]).c_str(),
                 axis_name(vf.axis[1], vf.sign[1]).c_str(), h_lo, h_hi, opt.max_faces);
-  std::string html = detail::kViewPageHead;
+  std::vector<std::string> scripts;
 #ifdef KNNOCC_TOOL_THREE_JS
-  html += "<script>\n";
-  for (const char* piece : detail::kThreeJsPieces) html += piece;
-  html += "\n</script>\n";
+  scripts.emplace_back("\n");
+  for (const char* piece : detail::kThreeJsPieces) scripts.back() += piece;
+  scripts.back() += "\n";
 #endif
-  html += "<script>\nconst KNNOCC_DATA = " + std::string(head) + maps_json + "]};\n</script>\n";
-  html += detail::kViewPageScript;
-  return html;
+  scripts.push_back("\nconst KNNOCC_DATA = " + std::string(head) + maps_json + "]};\n");
+  scripts.emplace_back(detail::kViewPageScript);
+  std::string html = "<!doctype html>\n<html><head><meta charset=\"utf-8\">\n" +
+                     detail::content_security_policy(scripts) + detail::kViewPageHead;
+  for (const std::string& s : scripts) html += "<script>" + s + "</script>\n";
+  return html + "</body></html>\n";
 }
 
 /// Writes the page atomically; io::Error naming `path` for an empty map or a build without

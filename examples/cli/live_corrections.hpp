@@ -3,17 +3,16 @@
 // corrects its keyframes (LiveMapper, include/knnocc/live/live_mapper.hpp).
 //
 // DIR holds pose snapshots after_NNNNNN.txt: the trajectory of keyframes 0..NNNNNN (one line
-// each, the format of poses.txt) as the SLAM system knew it after keyframe NNNNNN. A snapshot is
-// applied right after its keyframe is inserted: every keyframe whose pose differs is re-posed at
-// once. Keyframes without a newer snapshot keep the pose of poses.txt. The final map equals the
-// map of the same folder with each keyframe's last pose in poses.txt (docs/live_mapping.md).
+// each, the format of poses.txt) as the SLAM system knew it after keyframe NNNNNN, read and checked
+// against poses.txt by io::read_corrections (io/corrections.hpp). A snapshot is applied right after
+// its keyframe is inserted: every keyframe whose pose differs is re-posed at once. Keyframes
+// without a newer snapshot keep the pose of poses.txt. The final map equals the map of the same
+// folder with each keyframe's last pose in poses.txt (docs/live_mapping.md).
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <map>
 #include <new>
 #include <string>
 #include <utility>
@@ -22,6 +21,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <knnocc/io/corrections.hpp>
 #include <knnocc/io/error.hpp>
 #include <knnocc/io/scan_source.hpp>
 #include <knnocc/io/sequence.hpp>
@@ -61,36 +61,6 @@ struct knnocc::pose_traits<knnocc::cli::EigenPose> {
 
 namespace knnocc::cli {
 
-/// DIR's snapshots by keyframe index; io::Error for a file that does not fit `keyframes`.
-inline std::map<std::size_t, std::vector<io::Pose>> read_corrections(const std::string& dir,
-                                                                     std::size_t keyframes) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw io::Error(dir, "not a folder of after_NNNNNN.txt files");
-  std::map<std::size_t, std::vector<io::Pose>> out;
-  for (const auto& e : fs::directory_iterator(dir, ec)) {
-    const std::string name = e.path().filename().string();
-    if (name.rfind("after_", 0) != 0 || e.path().extension() != ".txt") continue;
-    const std::string digits = name.substr(6, name.size() - 10);
-    if (digits.empty() || digits.size() > 9 ||
-        !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
-      throw io::Error(e.path().string(), "expected after_NNNNNN.txt (NNNNNN: keyframe index)");
-    const std::size_t after = std::stoul(digits);
-    if (after >= keyframes)
-      throw io::Error(e.path().string(), "keyframe " + std::to_string(after) +
-                                             " does not exist (the sequence has " +
-                                             std::to_string(keyframes) + ")");
-    std::vector<io::Pose> poses = io::read_trajectory(e.path().string());
-    if (poses.size() != after + 1)
-      throw io::Error(e.path().string(), "expected " + std::to_string(after + 1) +
-                                             " poses (keyframes 0.." + std::to_string(after) +
-                                             "), found " + std::to_string(poses.size()));
-    out.emplace(after, std::move(poses));
-  }
-  if (ec) throw io::Error(dir, ec.message());
-  return out;
-}
-
 /// `knnocc map` with --corrections; opt: map_command.hpp's MapOptions.
 template <class MapOptions, class Model>
 int run_map_corrections(const Args& args, const MapOptions& opt, const Model& model) {
@@ -101,7 +71,7 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
   if (!io::is_sequence_dir(input))
     throw io::Error(input, "--corrections needs a sequence folder (poses.txt + clouds/)");
   const io::ScanSource source = io::ScanSource::open(input);
-  const auto corrections = read_corrections(dir, source.size());
+  const auto corrections = io::read_corrections(dir, source.sequence()->poses());
   LiveMapper<Model, OcKey, EigenPose> live(
       opt.res, model, MapperOptions{opt.max_range, opt.discretize, opt.threads, {}});
   live.set_memory_limit(map_memory_share(opt.memory_limit));  // rebuilds and replays included
@@ -133,7 +103,7 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
       try {
         live.add(i, EigenPose::from(scan.pose), std::move(pts), std::move(ids));
       } catch (const std::invalid_argument& e) {
-        throw io::Error(source.path(), "scan " + std::to_string(i) + ": " + e.what());
+        throw io::Error(source.sequence()->cloud_path(i), e.what());
       }
       const auto snapshot = corrections.find(i);
       if (snapshot == corrections.end()) continue;

@@ -79,7 +79,9 @@ options:
   --corrections DIR     SLAM pose corrections: DIR/after_NNNNNN.txt, the poses of keyframes
                         0..NNNNNN (poses.txt format) known after keyframe NNNNNN, applied then;
                         the map stays equal to mapping with the final poses (sequence folders;
-                        prints `corrections N reposed_keyframes N median_ms X max_ms X`)
+                        prints `corrections N reposed_keyframes N median_ms X max_ms X`). Checked
+                        first: one name rule, row count, stamps within 1e-4 s of poses.txt's
+                        (docs/live_mapping.md)
 outputs are never inputs: an output that is an input file (links count) or lies inside an input
 folder (the sequence, DIR) is refused before any work
 k-NN model (--model knn): the map point cloud is the union of the keyframes (clouds with an `id`

@@ -239,6 +239,30 @@ case "$CASE" in
     expect 2 "corr/after_000000.txt: line 1: cannot parse '1\\\\x1b\[1m' as a number" \
       "$K" map --input seq --corrections corr --res 0.1
     ! grep -q $'\033' err.txt || fail "a raw ESC byte on stderr" ;;
+  corrections_checked)  # snapshots must fit the keyframes: names, duplicates, stamps, rows
+    "$K" sim --out seq --seed 3 --keyframes 12 --drift 0.3 > /dev/null || fail "sim"
+    snap() { rm -rf c && mkdir c && cp seq/corrections/* c/; }
+    snap && cp c/after_000009.txt c/after_9.txt
+    expect 2 "c/after_9.txt: a second snapshot of keyframe 9 \(also after_000009.txt\)" \
+      "$K" map --input seq --corrections c --res 0.1 --out-voxels v.txt
+    for name in AFTER_000009.txt after_000009.TXT after_abc.txt after9.txt; do
+      snap && mv c/after_000009.txt "c/$name"
+      expect 2 "c/$name: not a snapshot name: snapshots are after_N.txt" \
+        "$K" map --input seq --corrections c --res 0.1 --out-voxels v.txt
+    done
+    snap && grep -v '^#' seq/corrections/after_000009.txt | tac > c/after_000009.txt  # rows reversed
+    expect 2 "c/after_000009.txt: line 1: stamp 9.000000 is not keyframe 0's \(0.000000 in poses.txt; tolerance 1e-4 s\)" \
+      "$K" map --input seq --corrections c --res 0.1 --out-voxels v.txt
+    snap && awk '!/^#/ { $1 = $1 + 1 } 1' seq/corrections/after_000009.txt > c/after_000009.txt  # shifted
+    expect 2 "c/after_000009.txt: line 2: stamp 1.000000 is not keyframe 0's" \
+      "$K" map --input seq --corrections c --res 0.1 --out-voxels v.txt
+    # 600 MB that should hold 10 rows: refused at row 11, the file never read whole.
+    snap && echo '10 0 0 0 0 0 0 1' >> c/after_000009.txt && truncate -s 600M c/after_000009.txt
+    expect 2 "c/after_000009.txt: line 12: more poses than the 10 expected" \
+      timeout 5 "$K" map --input seq --corrections c --res 0.1 --memory-limit 1G --out-voxels v.txt
+    [ ! -e v.txt ] || fail "v.txt written"
+    snap && expect 0 "" "$K" map --input seq --corrections c --res 0.1 --out-voxels v.txt
+    [ -s v.txt ] || fail "the good snapshots were refused" ;;
   *) fail "unknown case $CASE" ;;
 esac
 echo PASS

@@ -109,8 +109,9 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
       if (snapshot == corrections.end()) continue;
       const auto a = std::chrono::steady_clock::now();
       std::vector<std::pair<std::uint64_t, EigenPose>> poses;
-      for (std::size_t j = 0; j < snapshot->second.size(); ++j)
-        poses.emplace_back(j, EigenPose::from(snapshot->second[j]));
+      for (std::size_t j = 0; j < snapshot->second.size(); ++j)  // as poses.txt's rows
+        poses.emplace_back(j,
+                           EigenPose::from(source.sequence()->scanner_pose(snapshot->second[j])));
       live.repose(poses);
       reposed += live.last_update().changed;
       correction_ms.push_back(

@@ -263,6 +263,18 @@ case "$CASE" in
     [ ! -e v.txt ] || fail "v.txt written"
     snap && expect 0 "" "$K" map --input seq --corrections c --res 0.1 --out-voxels v.txt
     [ -s v.txt ] || fail "the good snapshots were refused" ;;
+  corrections_velodyne_frame)  # KITTI: snapshot rows are poses.txt's rows, calib.txt's Tr applied alike
+    mkdir -p kitti/velodyne kitti/c
+    printf 'Tr: 0 -1 0 0.1 0 0 -1 -0.2 1 0 0 0.3\n' > kitti/calib.txt
+    printf '1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 0.5\n' > kitti/poses.txt
+    for i in 0 1; do  # two points, 3 m and 4 m ahead of the Velodyne
+      printf '\0\0\x40\x40\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x80\x40\0\0\x80\x3f\0\0\0\0\0\0\0\0' > kitti/velodyne/00000$i.bin
+    done
+    cp kitti/poses.txt kitti/c/after_000001.txt  # the same poses: nothing to correct
+    "$K" map --input kitti --res 0.1 --out-voxels plain.txt > /dev/null || fail "plain map"
+    expect 0 "" "$K" map --input kitti --corrections kitti/c --res 0.1 --out-voxels live.txt
+    grep -q "^corrections 1 reposed_keyframes 0 " out.txt || fail "keyframes re-posed: $(cat out.txt)"
+    cmp -s plain.txt live.txt || fail "the corrected map differs from the plain one" ;;
   *) fail "unknown case $CASE" ;;
 esac
 echo PASS

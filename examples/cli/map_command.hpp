@@ -264,14 +264,7 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   progress.finish();
   const auto& map = mapper.map();
 
-  if (total.nonfinite)
-    std::fprintf(stderr, "knnocc map: %s: skipped %zu points with NaN/Inf coordinates\n",
-                 opt.input.c_str(), total.nonfinite);
-  if (total.out_of_range)
-    std::fprintf(stderr,
-                 "knnocc map: %s: skipped %zu points outside the map's key range (|c| >= %g m at "
-                 "--res %g); use a coarser --res (the library's WideKey maps reach 64x farther)\n",
-                 opt.input.c_str(), total.out_of_range, map.grid().max_coord(), opt.res);
+  note_skipped_points(opt.input, total.nonfinite, total.out_of_range, map.grid().max_coord());
 
   io::CommitGroup outputs;  // all written, then all renamed
   if (!opt.out_voxels.empty()) {

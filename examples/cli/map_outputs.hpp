@@ -81,6 +81,20 @@ inline const char* model_title(const OctoMapModel&) { return "OctoMap model"; }
 inline const char* model_title(const KnnModel&) { return "k-NN model"; }
 inline const char* model_title(const RobustModel&) { return "robust model"; }
 
+/// The notes (stderr) on points a map holds no update from: NaN/Inf coordinates, points outside
+/// the key range (|c| >= max_coord), e.g. moved there by a correction.
+inline void note_skipped_points(const std::string& input, std::size_t nonfinite,
+                                std::size_t out_of_range, double max_coord) {
+  if (nonfinite)
+    std::fprintf(stderr, "knnocc map: %s: skipped %zu points with NaN/Inf coordinates\n",
+                 input.c_str(), nonfinite);
+  if (out_of_range)
+    std::fprintf(stderr,
+                 "knnocc map: %s: skipped %zu points outside the map's key range (|c| >= %g m at "
+                 "--res %g); use a coarser --res (the library's WideKey maps reach 64x farther)\n",
+                 input.c_str(), out_of_range, max_coord, max_coord / 32768.0);
+}
+
 /// Prints `wrote A, B, ...` (nothing when no file was written).
 inline void print_written(const std::vector<std::string>& written) {
   if (written.empty()) return;

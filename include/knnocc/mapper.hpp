@@ -103,6 +103,19 @@ struct has_tracker_params : std::false_type {};
 template <class M>
 struct has_tracker_params<M, std::void_t<decltype(std::declval<const M&>().tracker_params())>>
     : std::true_type {};
+
+/// What the scan integrator does with an end point q seen from o (both as the float points it
+/// casts): ScanStats counts the first three; only `inserted` points mark a voxel occupied.
+enum class EndpointFate { nonfinite, beyond_max_range, out_of_range, inserted };
+template <class Key>
+EndpointFate endpoint_fate(const Grid<Key>& grid, const Point3f& q, const Point3f& o,
+                           double max_range) {
+  if (!finite(q)) return EndpointFate::nonfinite;
+  if (max_range >= 0.0 && octomap_norm(q.x - o.x, q.y - o.y, q.z - o.z) > max_range)
+    return EndpointFate::beyond_max_range;
+  Key k;
+  return grid.point_to_key(q, k) ? EndpointFate::inserted : EndpointFate::out_of_range;
+}
 }  // namespace detail
 
 template <class Model = OctoMapModel, class Key = OcKey,
@@ -300,13 +313,10 @@ class Mapper {
   // The integrator's tests (OctoMap's float norm against max_range, the key range), so the map
   // cloud holds exactly the points that make an occupied update.
   bool within_range(std::size_t j) const {
-    const Point3d& p = world_[j];
-    if (!is_finite(p)) return false;
-    const Point3f q = detail::to_point3f(p), o = detail::to_point3f(origin_);
-    Key k;
-    if (!map_.grid().point_to_key(q, k)) return false;
-    if (options_.max_range < 0.0) return true;
-    return detail::octomap_norm(q.x - o.x, q.y - o.y, q.z - o.z) <= options_.max_range;
+    return is_finite(world_[j]) &&
+           detail::endpoint_fate(map_.grid(), detail::to_point3f(world_[j]),
+                                 detail::to_point3f(origin_),
+                                 options_.max_range) == detail::EndpointFate::inserted;
   }
 
   // Eq 13-15 for the loaded keyframe, then the scan (Alg. 3).

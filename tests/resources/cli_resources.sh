@@ -275,6 +275,19 @@ case "$CASE" in
     expect 0 "" "$K" map --input kitti --corrections kitti/c --res 0.1 --out-voxels live.txt
     grep -q "^corrections 1 reposed_keyframes 0 " out.txt || fail "keyframes re-posed: $(cat out.txt)"
     cmp -s plain.txt live.txt || fail "the corrected map differs from the plain one" ;;
+  corrections_key_range_note)  # a correction that moves points out of the key range: map's note
+    "$K" sim --out seq --seed 3 --keyframes 12 --drift 0.3 > /dev/null || fail "sim"
+    mkdir c && awk '!/^#/ && ++n == 4 { $2 = $2 + 5000 } 1' seq/corrections/after_000009.txt > c/after_000009.txt
+    "$K" map --input seq --corrections c --res 0.1 > out.txt 2> err.txt || fail "exit $?"
+    cat err.txt
+    grep -Eq "^knnocc map: seq: skipped [1-9][0-9]* points outside the map's key range \(\|c\| >= 3276.8 m at --res 0.1\)" err.txt ||
+      fail "no key-range note"
+    n=$(grep -o 'skipped [0-9]*' err.txt | cut -d' ' -f2)
+    # the same count as plain map with that keyframe's pose
+    mkdir -p moved && cp -r seq/clouds moved/ && { head -1 seq/poses.txt; sed -n 2,11p seq/corrections/after_000009.txt | awk 'NR == 4 { $2 = $2 + 5000 } 1'; sed -n 12,13p seq/poses.txt; } > moved/poses.txt
+    "$K" map --input moved --res 0.1 > /dev/null 2> err2.txt || fail "plain map"
+    cat err2.txt
+    grep -q "skipped $n points outside the map's key range" err2.txt || fail "plain map skips another count" ;;
   *) fail "unknown case $CASE" ;;
 esac
 echo PASS

@@ -92,6 +92,34 @@ class LiveMapper {
   /// Bytes held by the stored keyframes (the map's own memory: map().memory_usage()).
   std::size_t keyframe_memory() const { return store_.memory_usage(); }
 
+  /// The points of the current keyframes at their current poses as a from-scratch Mapper counts
+  /// them (ScanStats points, nonfinite, out_of_range, beyond_max_range, summed): e.g. the points a
+  /// correction moved outside the key range, which the map holds no update from.
+  ScanStats point_counts() const {
+    ScanStats s;
+    for (const keyframe_type& kf : store_.frames()) {
+      const Point3f o = detail::to_point3f(pose_traits<Pose>::origin(kf.pose));
+      for (const Point3f& p : kf.points) {
+        ++s.points;
+        const Point3f q = detail::to_point3f(pose_traits<Pose>::to_world(kf.pose, p));
+        switch (detail::endpoint_fate(mapper_->map().grid(), q, o, options_.max_range)) {
+          case detail::EndpointFate::nonfinite:
+            ++s.nonfinite;
+            break;
+          case detail::EndpointFate::beyond_max_range:
+            ++s.beyond_max_range;
+            break;
+          case detail::EndpointFate::out_of_range:
+            ++s.out_of_range;
+            break;
+          case detail::EndpointFate::inserted:
+            break;
+        }
+      }
+    }
+    return s;
+  }
+
   /// Bounds the memory of the map (OccupancyMap::set_memory_limit; 0: no bound), now and of every
   /// map built later: rebuilds and the scratch maps of regional replays. An operation that would
   /// pass it throws MemoryLimitError; the keyframes then hold the operation's result but the map

@@ -242,8 +242,12 @@ TEST_CASE("live_mapper.bad_operations_change_nothing") {
   const std::size_t voxels = live.map().num_voxels();
   CHECK_THROWS_AS(live.add(1, a.pose, a.points, a.ids), std::invalid_argument);  // id again
   CHECK_THROWS_AS(live.add(2, b.pose, b.points, b.ids), std::invalid_argument);  // ids mixed
-  CHECK_THROWS_AS(live.repose({{7, a.pose}}), std::invalid_argument);            // unknown id
-  CHECK_THROWS_AS(live.remove({1, 7}), std::invalid_argument);                   // unknown id
+  Frame twice = a;
+  twice.ids.back() = twice.ids.front();  // one map point observed twice by one keyframe
+  CHECK_THROWS_WITH_AS(live.add(3, twice.pose, twice.points, twice.ids),
+                       doctest::Contains("appears twice in one keyframe"), std::invalid_argument);
+  CHECK_THROWS_AS(live.repose({{7, a.pose}}), std::invalid_argument);  // unknown id
+  CHECK_THROWS_AS(live.remove({1, 7}), std::invalid_argument);         // unknown id
   RigidPose nan_pose = a.pose;
   nan_pose.t[0] = std::nan("");
   CHECK_THROWS_AS(live.repose({{1, nan_pose}}), std::invalid_argument);

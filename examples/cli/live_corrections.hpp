@@ -122,6 +122,7 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
   const auto& map = live.map();
   const ScanStats skipped = live.point_counts();  // at the final poses, as plain `map` counts
   note_skipped_points(input, skipped.nonfinite, skipped.out_of_range, map.grid().max_coord());
+  note_empty_map(input, source.size(), points, map, model);
   std::vector<std::string> written;
   if (!out_voxels.empty()) {
     const io::VoxelSelection sel = which == "all"        ? io::VoxelSelection::all

@@ -265,6 +265,7 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   const auto& map = mapper.map();
 
   note_skipped_points(opt.input, total.nonfinite, total.out_of_range, map.grid().max_coord());
+  note_empty_map(opt.input, clouds, total.points, map, model);
 
   io::CommitGroup outputs;  // all written, then all renamed
   if (!opt.out_voxels.empty()) {

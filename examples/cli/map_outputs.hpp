@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <set>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <knnocc/io/octomap_tree.hpp>
@@ -93,6 +94,21 @@ inline void note_skipped_points(const std::string& input, std::size_t nonfinite,
                  "knnocc map: %s: skipped %zu points outside the map's key range (|c| >= %g m at "
                  "--res %g); use a coarser --res (the library's WideKey maps reach 64x farther)\n",
                  input.c_str(), out_of_range, max_coord, max_coord / 32768.0);
+}
+
+/// A warning (stderr) when clouds were read and the map holds no voxel: never silent.
+template <class Model>
+void note_empty_map(const std::string& input, std::size_t clouds, std::size_t points,
+                    const OccupancyMap<OcKey>& map, const Model&) {
+  if (clouds == 0 || map.count_voxels().known() > 0) return;
+  const char* why = std::is_same_v<Model, RobustModel>
+                        ? "; the robust model adds a map point's evidence only once --min-views "
+                          "keyframes have seen it"
+                        : "";
+  std::fprintf(stderr,
+               "knnocc map: %s: warning: the map is empty: the %zu points of %zu clouds updated no "
+               "voxel%s\n",
+               input.c_str(), points, clouds, why);
 }
 
 /// Prints `wrote A, B, ...` (nothing when no file was written).

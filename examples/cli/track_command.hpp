@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -70,7 +71,12 @@ int run_track_with(const Args& args, const Policy& policy) {
   Progress progress("track", seq.size());
   for (std::size_t i = 0; i < seq.size(); ++i) {
     io::keyframe_to_world(seq.pose(i), seq.load_cloud(i), max_range, world, ids);
-    const ChangeSet cs = map_cloud.add(world, ids);
+    ChangeSet cs;
+    try {
+      cs = map_cloud.add(world, ids);
+    } catch (const std::invalid_argument& e) {  // ids repeated in the keyframe, or mixed
+      throw io::Error(seq.cloud_path(i), e.what());
+    }
     const auto a = std::chrono::steady_clock::now();
     const TrackerUpdate up = tracker.apply(cs);
     const double us =

@@ -189,11 +189,11 @@ class Mapper {
   }
 
   /// Alg. 3 for one keyframe: `points` in the world frame (any point type), seen from `origin`;
-  /// `ids` one map-point id per point, or empty (then each point is a new map point). A sequence
-  /// must either always or never give ids, and a Mapper takes keyframes through this overload or
-  /// through the ChangeSet one, not both (std::invalid_argument). The OctoMap model ignores ids.
-  /// A NaN/Inf origin inserts nothing and leaves the map cloud as it was
-  /// (ScanStats::origin_valid == false).
+  /// `ids` one distinct map-point id per point, or empty (then each point is a new map point); a
+  /// repeated id is std::invalid_argument. A sequence must either always or never give ids, and a
+  /// Mapper takes keyframes through this overload or through the ChangeSet one, not both
+  /// (std::invalid_argument). The OctoMap model ignores ids. A NaN/Inf origin inserts nothing and
+  /// leaves the map cloud as it was (ScanStats::origin_valid == false).
   template <class Points, class Origin>
   KeyframeStats insert_keyframe(const Origin& origin, const Points& points,
                                 const std::vector<std::uint64_t>& ids = {}) {
@@ -304,6 +304,7 @@ class Mapper {
     for (const std::uint64_t id : ids)
       if (id == KeyframeUnion::kNoId)
         detail::invalid_argument("insert_keyframe: id 2^64-1 is reserved (KeyframeUnion::kNoId)");
+    detail::check_distinct_ids("insert_keyframe", ids, id_scratch_);
     if (is_finite(origin_)) return true;
     ks.scan.origin_valid = false;
     ks.scan.points = world_.size();
@@ -499,7 +500,7 @@ class Mapper {
   KeyframeUnion union_;
   Point3d origin_;
   std::vector<Point3d> world_, cloud_;
-  std::vector<std::uint64_t> cloud_ids_, cloud_map_ids_, point_ids_;
+  std::vector<std::uint64_t> cloud_ids_, cloud_map_ids_, point_ids_, id_scratch_;
   std::vector<EndpointRating> ratings_;
   // Contextual model only (rate_in_context).
   bool ids_given_ = false;

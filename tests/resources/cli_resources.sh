@@ -288,6 +288,39 @@ case "$CASE" in
     "$K" map --input moved --res 0.1 > /dev/null 2> err2.txt || fail "plain map"
     cat err2.txt
     grep -q "skipped $n points outside the map's key range" err2.txt || fail "plain map skips another count" ;;
+  unmappable_values)  # refused on read, or a warning: never a map of nonsense without a word
+    "$K" map --input p.xyz --res 0.1 --out-bt small.bt > /dev/null || fail "map"
+    sed 's/^res 0.1$/res 1e308/' small.bt > huge.bt
+    expect 2 "huge.bt: header line [0-9]+: resolution 1e\+308 is above 1.03846e\+34 m: the key range" "$K" view huge.bt -o h.html
+    expect 2 "huge.bt: header line [0-9]+: resolution 1e\+308 is above" "$K" convert huge.bt h.ply
+    [ ! -e h.html ] && [ ! -e h.ply ] || fail "an output of the 1e308 map was written"
+    expect 2 "small.bt: resolution 0.1 differs from --res 0.1000001" \
+      "$K" map --input p.xyz --res 0.1000001 --init-map small.bt --out-bt q.bt
+    mkdir -p rep/clouds && printf '0 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n' > rep/poses.txt
+    for i in 0 1; do printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty uint id\nend_header\n1 0 0 7\n1 0.5 0 7\n1 1 0 8\n' > rep/clouds/00000$i.ply; done
+    for model in robust knn; do
+      expect 2 "rep/clouds/000000.ply: insert_keyframe: map-point id 7 appears twice in one keyframe" \
+        "$K" map --input rep --res 0.1 --model $model
+    done
+    expect 2 "rep/clouds/000000.ply: KeyframeUnion: map-point id 7 appears twice" "$K" track --input rep --k 1 --out-stats st.txt
+    mkdir rep/c && expect 2 "rep/clouds/000000.ply: LiveMapper::add: map-point id 7 appears twice" \
+      "$K" map --input rep --model knn --corrections rep/c --res 0.1
+    # an empty map from clouds that hold points: a warning, exit 0
+    printf '9999 0 0\n' > far.xyz
+    "$K" map --input far.xyz --res 0.1 > out.txt 2> err.txt || fail "exit $?"
+    grep -q "far.xyz: warning: the map is empty: the 1 points of 1 clouds updated no voxel" err.txt || fail "no warning"
+    "$K" sim --out seq --seed 3 --keyframes 2 > /dev/null || fail "sim"
+    "$K" map --input seq --res 0.1 --model robust --min-views 3 > out.txt 2> err.txt || fail "exit $?"
+    grep -q "seq: warning: the map is empty: .* the robust model adds a map point's evidence only once --min-views" err.txt ||
+      fail "no warning for the robust model"
+    # eval without --against: n/a, not 0, and it says why
+    "$K" eval --ids seq --map small.bt > out.txt 2> err.txt || fail "eval"
+    grep -q "reference_kept n/a lost n/a" out.txt && grep -q "reference_kept and lost need --against" err.txt ||
+      fail "eval: $(cat out.txt err.txt)"
+    expect 2 "--keyframes 100000 with --drift would write about 76.2 GB, more than the 1.0 GB sim writes" \
+      timeout 5 "$K" sim --out big --keyframes 100000 --drift 0.1
+    [ ! -e big ] || fail "big/ written"
+    expect 2 "at most 64 maps fit one page, got 65" "$K" view $(for i in $(seq 65); do echo small.bt; done) -o v.html ;;
   *) fail "unknown case $CASE" ;;
 esac
 echo PASS

@@ -133,7 +133,8 @@ class LiveMapper {
   /// Adds keyframe `id` (new id) seen from `pose`; `points` in the sensor frame; `ids` one
   /// map-point id per point or empty (k-NN model: a sequence gives ids always or never; the
   /// OctoMap model ignores them). std::invalid_argument, with nothing changed, on a known id, a
-  /// non-finite pose origin, an id count that does not match, id 2^64-1, or ids mixed.
+  /// non-finite pose origin, an id count that does not match, id 2^64-1, an id repeated within
+  /// the keyframe, or ids mixed.
   void add(std::uint64_t id, const Pose& pose, std::vector<Point3f> points,
            std::vector<std::uint64_t> ids = {}) {
     if (store_.contains(id)) detail::invalid_argument("LiveMapper::add: keyframe id already added");
@@ -144,6 +145,8 @@ class LiveMapper {
       for (const std::uint64_t m : ids)
         if (m == KeyframeUnion::kNoId)
           detail::invalid_argument("LiveMapper::add: id 2^64-1 is reserved");
+      std::vector<std::uint64_t> scratch;
+      detail::check_distinct_ids("LiveMapper::add", ids, scratch);
       if (!points.empty() && ((ids.empty() && with_ids_ > 0) || (!ids.empty() && without_ids_ > 0)))
         detail::invalid_argument("LiveMapper::add: keyframes with and without ids are mixed");
       if (!points.empty()) ++(ids.empty() ? without_ids_ : with_ids_);

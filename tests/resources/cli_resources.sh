@@ -321,6 +321,16 @@ case "$CASE" in
       timeout 5 "$K" sim --out big --keyframes 100000 --drift 0.1
     [ ! -e big ] || fail "big/ written"
     expect 2 "at most 64 maps fit one page, got 65" "$K" view $(for i in $(seq 65); do echo small.bt; done) -o v.html ;;
+  stale_temporaries_removed)  # a killed run's temporary goes at the next start; a live writer's stays
+    printf 'partial' > a.bt.tmp-Ab12Cd && touch -d '1 minute ago' a.bt.tmp-Ab12Cd
+    printf 'partial' > a.bt.tmp-Ef34Gh && touch -d '1 minute ago' a.bt.tmp-Ef34Gh
+    exec 9< a.bt.tmp-Ef34Gh && flock -n 9 || fail "flock"  # as a writer at work holds its temporary
+    expect 0 "" "$K" map --input p.xyz --res 0.1 --out-bt a.bt
+    [ ! -e a.bt.tmp-Ab12Cd ] || fail "the stale temporary is still there"
+    [ -e a.bt.tmp-Ef34Gh ] || fail "a locked temporary was removed"
+    exec 9<&-  # the writer is gone: its temporary is stale
+    expect 0 "" "$K" map --input p.xyz --res 0.1 --out-bt a.bt
+    no_temporaries ;;
   *) fail "unknown case $CASE" ;;
 esac
 echo PASS

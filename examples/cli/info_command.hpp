@@ -85,6 +85,7 @@ inline int run_info(const std::vector<std::string>& argv) {
     check_tree_resolution(path, t.resolution);  // what map and convert accept, info accepts
     std::printf("format: OctoMap %s tree (%s), id %s\n", t.binary ? "binary" : "full",
                 t.binary ? ".bt" : ".ot", io::printable(t.id).c_str());
+    if (!t.note.empty()) std::printf("note: %s\n", io::printable(t.note).c_str());
     std::printf("resolution: %g\n", t.resolution);
     std::printf("nodes: %llu\n", static_cast<unsigned long long>(t.nodes));
     std::printf("leaves: %llu (occupied %llu, free %llu), depths %d-%d\n",

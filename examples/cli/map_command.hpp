@@ -20,6 +20,7 @@
 #include "input_guard.hpp"
 #include "live_corrections.hpp"
 #include "map_outputs.hpp"
+#include "map_snapshots.hpp"
 #include "output_set.hpp"
 #include "progress.hpp"
 #include "resource_limits.hpp"
@@ -66,8 +67,10 @@ options:
                         same map as one run; a .bt holds only occupied/free (clamped values).
                         --res defaults to the map's. A k-NN map cannot be continued from a file:
                         the tracker's map points and s_p statistics are not in it.
-  --save-every N        every N clouds, write the --out-bt / --out-ot files (atomically: a
-                        killed run leaves the last whole snapshot)
+  --save-every N        every N clouds, write the --out-bt / --out-ot files together (atomically:
+                        a killed run leaves the last whole snapshot); their header says which
+                        clouds they hold ("clouds 0 to 14 of SEQ; continue with --first 15",
+                        also in `knnocc info`): resume with --init-map F.ot --first 15
 )") + map_outputs_help() +
          R"(  -j, --threads N       threads that walk the rays of each cloud (default 1); the map is the
                         same for every N; at most the machine's hardware threads (more is capped,
@@ -206,6 +209,8 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
     throw UsageError("--first " + std::to_string(opt.first) + ": " + opt.input + " has " +
                      std::to_string(source.size()) + " clouds");
   const std::size_t last = opt.first + std::min(opt.count, source.size() - opt.first);
+  // --save-every: the maps record the clouds they hold (map_snapshots.hpp).
+  HeldClouds held{first_held_cloud(opt.init_map, opt.input, opt.first), last, opt.input};
   Progress progress("map", last - opt.first);
   std::vector<Point3f> world_f;  // OctoMap model: float points, as liboctomap
   std::vector<Point3d> world;    // k-NN model: double, as the tracker keeps them
@@ -251,8 +256,9 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
       progress.update(i + 1 - opt.first);
       if (opt.save_every && (i + 1 - opt.first) % opt.save_every == 0 && i + 1 < last) {
-        if (args.has("--out-bt")) io::write_bt(args.str("--out-bt"), mapper.map());
-        if (args.has("--out-ot")) io::write_ot(args.str("--out-ot"), mapper.map());
+        held.end = i + 1;
+        save_snapshot(args, mapper.map(), held_clouds_note(held));
+        held.end = last;
       }
     } catch (const MemoryLimitError&) {
       throw too_big(i, "the map needs more memory");
@@ -275,7 +281,8 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
     io::write_voxel_list(opt.out_voxels, io::voxel_records(map, which));
     written.push_back(opt.out_voxels);
   }
-  write_map_outputs(map, args, up_axis(args, up_estimate.result()), model_title(model), written);
+  write_map_outputs(map, args, up_axis(args, up_estimate.result()), model_title(model), written,
+                    opt.save_every ? held_clouds_note(held) : std::string());
   outputs.commit();
 
   if constexpr (Mapper<Model>::uses_map_cloud) {

@@ -124,16 +124,18 @@ inline UpAxis up_axis(const Args& args, UpAxis estimated = {}) {
 }
 
 /// Writes every requested output (each atomically; io::Error names the file on failure) and
-/// adds its name to `written`. `title` names the map in pictures and pages.
+/// adds its name to `written`. `title` names the map in pictures and pages; `note` goes into the
+/// .bt/.ot headers (io::encode_bt).
 inline void write_map_outputs(const OccupancyMap<OcKey>& map, const Args& args, UpAxis up,
-                              const std::string& title, std::vector<std::string>& written) {
+                              const std::string& title, std::vector<std::string>& written,
+                              const std::string& note = {}) {
   auto done = [&](const char* flag) { written.push_back(args.str(flag)); };
   if (args.has("--out-bt")) {
-    io::write_bt(args.str("--out-bt"), map);
+    io::write_bt(args.str("--out-bt"), map, note);
     done("--out-bt");
   }
   if (args.has("--out-ot")) {
-    io::write_ot(args.str("--out-ot"), map);
+    io::write_ot(args.str("--out-ot"), map, note);
     done("--out-ot");
   }
   if (args.has("--out-ply")) {

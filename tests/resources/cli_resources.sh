@@ -321,6 +321,18 @@ case "$CASE" in
       timeout 5 "$K" sim --out big --keyframes 100000 --drift 0.1
     [ ! -e big ] || fail "big/ written"
     expect 2 "at most 64 maps fit one page, got 65" "$K" view $(for i in $(seq 65); do echo small.bt; done) -o v.html ;;
+  save_every_resumes)  # snapshots say which clouds they hold; resumed, the one run's map
+    "$K" sim --out seq --seed 3 --keyframes 12 > /dev/null || fail "sim"
+    expect 0 "" "$K" map --input seq --res 0.1 --count 7 --save-every 3 --out-bt part.bt --out-ot part.ot
+    for f in part.bt part.ot; do
+      "$K" info $f | grep -q "^note: map: clouds 0 to 6 of seq; continue with --first 7$" || fail "$f: no note"
+    done
+    expect 2 "--init-map part.ot holds clouds 0 to 6 of seq: continue with --first 7, not 5" \
+      "$K" map --input seq --init-map part.ot --first 5 --out-ot whole.ot
+    expect 0 "" "$K" map --input seq --init-map part.ot --first 7 --out-ot whole.ot --save-every 2
+    "$K" info whole.ot | grep -q "^note: map: clouds 0 to 11 of seq; continue with --first 12$" || fail "no note"
+    expect 0 "" "$K" map --input seq --res 0.1 --out-ot one.ot
+    "$K" convert whole.ot plain.ot > /dev/null && cmp plain.ot one.ot || fail "the resumed map is not the one run's" ;;
   stale_temporaries_removed)  # a killed run's temporary goes at the next start; a live writer's stays
     printf 'partial' > a.bt.tmp-Ab12Cd && touch -d '1 minute ago' a.bt.tmp-Ab12Cd
     printf 'partial' > a.bt.tmp-Ef34Gh && touch -d '1 minute ago' a.bt.tmp-Ef34Gh

@@ -33,7 +33,11 @@ struct OctreeHeader {
   std::uint64_t size = 0;       // node count claimed by the header
   double resolution = 0.0;      // voxel edge
   std::size_t data_offset = 0;  // first byte of the node stream
+  std::string note;             // the text after "# knnocc " of such a comment line, or empty
 };
+
+/// The comment line a knnocc note is written as (OctoMap's readers skip comment lines).
+inline constexpr const char* kNotePrefix = "# knnocc ";
 
 inline OctreeHeader parse_octree_header(const std::string& path, const char* data,
                                         std::size_t size) {
@@ -67,6 +71,9 @@ inline OctreeHeader parse_octree_header(const std::string& path, const char* dat
     check_header_length(path, "OctoMap", static_cast<std::size_t>(e - data));
     ++line;
     while (b != e && is_blank(*b)) ++b;
+    const std::size_t prefix = std::strlen(kNotePrefix);
+    if (static_cast<std::size_t>(e - b) > prefix && std::memcmp(b, kNotePrefix, prefix) == 0)
+      h.note.assign(b + prefix, e);
     if (b == e || *b == '#') continue;
     const char* k = b;
     while (b != e && !is_blank(*b)) ++b;

@@ -21,6 +21,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "common_options.hpp"
+#include "input_guard.hpp"
 #include "map_files.hpp"
 #include "map_outputs.hpp"
 #include "output_set.hpp"
@@ -108,6 +109,7 @@ ConvertJob convert_job(const Args& args) {
   j.in_ext = lower_extension(j.in);
   j.out_ext = lower_extension(j.out);
   check_outputs({{"OUT", j.out}});
+  check_outputs_not_inputs({{"OUT", j.out}}, {{"IN", j.in}});
   j.encoding = args.str("--encoding");
   if (j.encoding == "binary_compressed" && j.out_ext != ".pcd")
     throw UsageError("--encoding binary_compressed is for .pcd output only");

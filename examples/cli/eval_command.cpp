@@ -49,8 +49,9 @@ keyframes; --crop M keeps the points within M of their camera, as `knnocc map --
   occupied N isolated N multiview N reference_kept N lost N free_multiview N far N
   isolated        occupied voxels without an occupied voxel among their 26 neighbours
   multiview       voxels holding a multi-view map point
-  reference_kept  of those, occupied in the --against map (e.g. `--model octomap`'s; else 0)
+  reference_kept  of those, occupied in the --against map (e.g. `--model octomap`'s)
   lost            of those, not occupied in --map
+                  (both need --against: without it they print n/a, with a note on stderr)
   free_multiview  multi-view voxels that are free in --map
   far             occupied voxels farther than --far from every multi-view voxel
 )";
@@ -150,10 +151,17 @@ int run_eval_ids(const Args& args) {
   }
   const eval::MultiviewMetrics m =
       eval::evaluate_multiview(map, mpv, against ? &*against : nullptr, opt);
+  // Without a reference map there is nothing kept or lost to count: n/a, not 0.
+  const std::string kept = against ? std::to_string(m.reference_kept) : "n/a",
+                    lost = against ? std::to_string(m.lost) : "n/a";
+  if (!against)
+    std::fprintf(stderr,
+                 "knnocc eval: note: reference_kept and lost need --against (a reference map of "
+                 "the same sequence)\n");
   std::printf(
-      "occupied %zu isolated %zu multiview %zu reference_kept %zu lost %zu free_multiview %zu "
+      "occupied %zu isolated %zu multiview %zu reference_kept %s lost %s free_multiview %zu "
       "far %zu\n",
-      m.occupied, m.isolated, m.multiview, m.reference_kept, m.lost, m.free_multiview, m.far);
+      m.occupied, m.isolated, m.multiview, kept.c_str(), lost.c_str(), m.free_multiview, m.far);
   return 0;
 }
 

@@ -91,7 +91,8 @@ int info_tree(const std::string& path) {
   const io::OctreeInfo t = io::inspect_octree(path);
   check_tree_resolution(path, t.resolution);  // what map and convert accept, info accepts
   std::printf("format: OctoMap %s tree (%s), id %s\n", t.binary ? "binary" : "full",
-              t.binary ? ".bt" : ".ot", t.id.c_str());
+              t.binary ? ".bt" : ".ot", io::printable(t.id).c_str());
+  if (!t.note.empty()) std::printf("note: %s\n", io::printable(t.note).c_str());
   std::printf("resolution: %g\n", t.resolution);
   std::printf("nodes: %llu\n", static_cast<unsigned long long>(t.nodes));
   std::printf("leaves: %llu (occupied %llu, free %llu), depths %d-%d\n",
@@ -122,8 +123,8 @@ int info_point_file(const std::string& path, const io::ScanSource& source) {
     const char* data = pcd.data == io::PcdData::ascii    ? "ascii"
                        : pcd.data == io::PcdData::binary ? "binary"
                                                          : "binary_compressed";
-    std::printf("format: PCD %s, fields %s, width %llu height %llu\n", data, fields.c_str(),
-                static_cast<unsigned long long>(pcd.width),
+    std::printf("format: PCD %s, fields %s, width %llu height %llu\n", data,
+                io::printable(fields).c_str(), static_cast<unsigned long long>(pcd.width),
                 static_cast<unsigned long long>(pcd.height));
     const double* v = pcd.viewpoint;
     std::printf("viewpoint: %g %g %g %g %g %g %g\n", v[0], v[1], v[2], v[3], v[4], v[5], v[6]);

@@ -42,7 +42,8 @@ int main(int argc, char** argv) {
   const std::vector<std::string> words(argv + 2, argv + argc);
   const cli::Command* command = cli::find_command(name, words);
   if (!command) {
-    std::fprintf(stderr, "knnocc: unknown command '%s' (see knnocc --help)\n", name.c_str());
+    std::fprintf(stderr, "knnocc: unknown command '%s' (see knnocc --help)\n",
+                 knnocc::io::printable(name).c_str());
     return 2;
   }
   knnocc::io::remove_temporaries_on_signal();
@@ -52,7 +53,7 @@ int main(int argc, char** argv) {
   try {
     return run(*command, words);
   } catch (const cli::UsageError& e) {
-    std::fprintf(stderr, "knnocc %s: %s\n", name.c_str(), e.what());
+    std::fprintf(stderr, "knnocc %s: %s\n", name.c_str(), knnocc::io::printable(e.what()).c_str());
   } catch (const knnocc::io::Error& e) {
     std::fprintf(stderr, "knnocc %s: %s\n", name.c_str(), e.what());
   } catch (const std::bad_alloc&) {
@@ -61,7 +62,7 @@ int main(int argc, char** argv) {
                  "(--memory-limit SIZE raises it; default 80 %% of this machine's memory)\n",
                  name.c_str(), cli::format_bytes(cli::memory_limit_bytes()).c_str());
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "knnocc %s: %s\n", name.c_str(), e.what());
+    std::fprintf(stderr, "knnocc %s: %s\n", name.c_str(), knnocc::io::printable(e.what()).c_str());
   }
   return 2;
 }

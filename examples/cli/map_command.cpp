@@ -18,8 +18,10 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "common_options.hpp"
+#include "input_guard.hpp"
 #include "live_corrections.hpp"
 #include "map_outputs.hpp"
+#include "map_snapshots.hpp"
 #include "output_set.hpp"
 #include "progress.hpp"
 #include "resource_limits.hpp"
@@ -121,8 +123,11 @@ CommandSpec make_map_spec() {
                      "a .bt holds only occupied/free (clamped values). A k-NN map cannot be "
                      "continued from a file: the tracker's map points are not in it"),
         Option::integer("--save-every", "N",
-                        "every N clouds, write the --out-bt / --out-ot files (atomically: a "
-                        "killed run leaves the last whole snapshot)")
+                        "every N clouds, write the --out-bt / --out-ot files together "
+                        "(atomically: a killed run leaves the last whole snapshot); their header "
+                        "says which clouds they hold (\"clouds 0 to 14 of SEQ; continue with "
+                        "--first 15\", also in `knnocc info`): resume with --init-map F.ot "
+                        "--first 15")
             .at_least(1),
         threads_option(), memory_limit_option(),
         Option::text("--corrections", "DIR",
@@ -130,7 +135,8 @@ CommandSpec make_map_spec() {
                      "0..NNNNNN (poses.txt format) known after keyframe NNNNNN, applied then; the "
                      "map stays equal to mapping with the final poses (sequence folders; octomap "
                      "and knn models; prints `corrections N reposed_keyframes N median_ms X "
-                     "max_ms X`)")},
+                     "max_ms X`). Checked first: one name rule, row count, stamps within 1e-4 s "
+                     "of poses.txt's (docs/live_mapping.md)")},
        ""});
   s.groups.push_back(map_output_group());
   s.groups.push_back(knn_model_group("k-NN model (--model knn)", kKnnText));
@@ -141,6 +147,8 @@ CommandSpec make_map_spec() {
                            .at_most(1000)},
                       kRobustText});
   s.footer =
+      "Outputs are never inputs: an output that is an input file (links count) or lies inside an\n"
+      "input folder (the sequence, --corrections DIR) is refused before any work.\n"
       "exit status: 0 success, 2 bad input (one line on stderr naming the file and the "
       "problem).\n";
   return s;
@@ -218,8 +226,9 @@ std::unique_ptr<Mapper<Model>> make_mapper(const MapOptions& opt, const Model& m
   if (opt.init_map.empty()) return std::make_unique<Mapper<Model>>(opt.res, model, mo);
   OccupancyMap<OcKey> init = read_tree_checked(opt.init_map);
   if (opt.res > 0 && std::abs(init.grid().resolution() - opt.res) > 1e-12 * opt.res)
-    throw io::Error(opt.init_map, "resolution " + std::to_string(init.grid().resolution()) +
-                                      " differs from --res " + std::to_string(opt.res));
+    throw io::Error(opt.init_map,
+                    "resolution " + io::detail::round_trip_text(init.grid().resolution()) +
+                        " differs from --res " + io::detail::round_trip_text(opt.res));
   if (lower_extension(opt.init_map) == ".bt")
     std::fprintf(stderr,
                  "knnocc map: %s: a .bt holds only occupied/free; continuing from clamped "
@@ -234,16 +243,6 @@ struct WorldPoints {
   std::vector<Point3d> d;  // k-NN model: double, as the tracker keeps them
   std::vector<std::uint64_t> ids;
 };
-
-/// Drops the points farther than `crop` from the sensor (sensor frame).
-void crop_points(std::vector<Point3f>& pts, double crop) {
-  if (!(crop > 0.0)) return;
-  std::size_t kept = 0;
-  for (const Point3f& p : pts)
-    if (std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= crop)
-      pts[kept++] = p;
-  pts.resize(kept);
-}
 
 /// Scan i into the map: cropped, moved to the world frame, refused when its bricks surely pass
 /// the budget.
@@ -266,7 +265,8 @@ KeyframeStats insert_scan(Mapper<Model>& mapper, io::Scan& scan, std::size_t i,
     }
   } else {
     std::vector<Point3f>& pts = scan.cloud.points;
-    crop_points(pts, opt.crop);
+    std::vector<std::uint64_t> no_ids;
+    crop_points(pts, no_ids, opt.crop);
     if (io::is_identity(scan.pose))
       w.f.swap(pts);
     else
@@ -278,20 +278,14 @@ KeyframeStats insert_scan(Mapper<Model>& mapper, io::Scan& scan, std::size_t i,
   }
 }
 
-/// The notes on skipped points, the k-NN line and the summary line.
+/// The notes on skipped points and an empty map, the k-NN line and the summary line.
 template <class Model>
-void report_map(const Mapper<Model>& mapper, const MapOptions& opt, MapTotals& totals,
-                std::chrono::steady_clock::time_point t0) {
+void report_map(const Mapper<Model>& mapper, const Model& model, const MapOptions& opt,
+                MapTotals& totals, std::chrono::steady_clock::time_point t0) {
   const auto& map = mapper.map();
   const ScanStats& total = totals.scan;
-  if (total.nonfinite)
-    std::fprintf(stderr, "knnocc map: %s: skipped %zu points with NaN/Inf coordinates\n",
-                 opt.input.c_str(), total.nonfinite);
-  if (total.out_of_range)
-    std::fprintf(stderr,
-                 "knnocc map: %s: skipped %zu points outside the map's key range (|c| >= %g m at "
-                 "--res %g); use a coarser --res (the library's WideKey maps reach 64x farther)\n",
-                 opt.input.c_str(), total.out_of_range, map.grid().max_coord(), opt.res);
+  note_skipped_points(opt.input, total.nonfinite, total.out_of_range, map.grid().max_coord());
+  note_empty_map(opt.input, totals.clouds, total.points, map, model);
   if constexpr (Mapper<Model>::uses_map_cloud) {
     const auto& tr = mapper.tracker();
     // Dense input (depth camera, LiDAR): the paper's s-rating removes far, sparser surfaces.
@@ -318,17 +312,19 @@ void report_map(const Mapper<Model>& mapper, const MapOptions& opt, MapTotals& t
               total.points, counts.occupied, counts.free, seconds);
 }
 
-/// --out-voxels and the map files, all written and then all renamed.
+/// --out-voxels and the map files, all written and then all renamed; `note` goes into the
+/// .bt/.ot headers (map_snapshots.hpp).
 template <class Map>
 std::vector<std::string> write_outputs(const Map& map, const Args& args, const MapOptions& opt,
-                                       UpAxis up, const std::string& title) {
+                                       UpAxis up, const std::string& title,
+                                       const std::string& note) {
   std::vector<std::string> written;
   io::CommitGroup outputs;
   if (!opt.out_voxels.empty()) {
     io::write_voxel_list(opt.out_voxels, io::voxel_records(map, voxel_selection(opt.which)));
     written.push_back(opt.out_voxels);
   }
-  write_map_outputs(map, args, up, title, written);
+  write_map_outputs(map, args, up, title, written, note);
   outputs.commit();
   return written;
 }
@@ -345,6 +341,8 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
     throw UsageError("--first " + std::to_string(opt.first) + ": " + opt.input + " has " +
                      std::to_string(source.size()) + " clouds");
   const std::size_t last = opt.first + std::min(opt.count, source.size() - opt.first);
+  // --save-every: the maps record the clouds they hold (map_snapshots.hpp).
+  HeldClouds held{first_held_cloud(opt.init_map, opt.input, opt.first), last, opt.input};
   Progress progress("map", last - opt.first);
   UpEstimator up_estimate;
   MapTotals totals;
@@ -357,10 +355,9 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
       totals.keyframe_ms.push_back(
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
       progress.update(i + 1 - opt.first);
-      if (opt.save_every && (i + 1 - opt.first) % opt.save_every == 0 && i + 1 < last) {
-        if (args.has("--out-bt")) io::write_bt(args.str("--out-bt"), mapper->map());
-        if (args.has("--out-ot")) io::write_ot(args.str("--out-ot"), mapper->map());
-      }
+      if (opt.save_every && (i + 1 - opt.first) % opt.save_every == 0 && i + 1 < last)
+        save_snapshot(args, mapper->map(),
+                      held_clouds_note(HeldClouds{held.first, i + 1, opt.input}));
     } catch (const MemoryLimitError&) {
       throw budget.too_big(i, "the map needs more memory");
     } catch (const std::bad_alloc&) {
@@ -368,9 +365,10 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
                       out_of_memory_text(opt.memory_limit, "reading or mapping it", budget.res));
     }
   progress.finish();
-  const std::vector<std::string> written = write_outputs(
-      mapper->map(), args, opt, up_axis(args, up_estimate.result()), model_title(model));
-  report_map(*mapper, opt, totals, t0);
+  const std::vector<std::string> written =
+      write_outputs(mapper->map(), args, opt, up_axis(args, up_estimate.result()),
+                    model_title(model), opt.save_every ? held_clouds_note(held) : std::string());
+  report_map(*mapper, model, opt, totals, t0);
   print_written(written);
   return 0;
 }
@@ -378,8 +376,11 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
 /// The options of a run, checked together (each option's own range is checked by Args).
 MapOptions map_options(const Args& args) {
   check_map_outputs(args);
-  check_outputs(requested_outputs(
-      args, {"--out-voxels", "--out-bt", "--out-ot", "--out-ply", "--out-png", "--out-html"}));
+  const OutputList files = requested_outputs(
+      args, {"--out-voxels", "--out-bt", "--out-ot", "--out-ply", "--out-png", "--out-html"});
+  check_outputs(files);
+  check_outputs_not_inputs(files,
+                           requested_inputs(args, {"--input", "--init-map", "--corrections"}));
   MapOptions opt;
   opt.input = args.str("--input");
   if (!args.has("--res") && !args.has("--init-map"))

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <string>
 
+#include <knnocc/io/detail/file_text.hpp>
 #include <knnocc/io/error.hpp>
 #include <knnocc/io/voxel_list.hpp>
 #include <knnocc/map/occupancy_map.hpp>
@@ -52,12 +53,10 @@ inline bool is_tree_file(const std::string& path) {
 inline OccupancyMap<OcKey> read_map_file(const std::string& path, double res) {
   if (!is_tree_file(path)) return reading(path, [&] { return read_voxel_list_map(path, res); });
   OccupancyMap<OcKey> map = read_tree_checked(path);
-  if (res > 0 && map.grid().resolution() != res) {
-    char text[160];
-    std::snprintf(text, sizeof text, "the tree's resolution is %.17g, not --res %.17g",
-                  map.grid().resolution(), res);
-    throw io::Error(path, text);
-  }
+  if (res > 0 && map.grid().resolution() != res)
+    throw io::Error(path, "the tree's resolution is " +
+                              io::detail::round_trip_text(map.grid().resolution()) +
+                              ", not --res " + io::detail::round_trip_text(res));
   return map;
 }
 

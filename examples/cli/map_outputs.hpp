@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <knnocc/io/octomap_tree.hpp>
@@ -56,6 +57,35 @@ inline const char* model_title(const OctoMapModel&) { return "OctoMap model"; }
 inline const char* model_title(const KnnModel&) { return "k-NN model"; }
 inline const char* model_title(const RobustModel&) { return "robust model"; }
 
+/// The notes (stderr) on points a map holds no update from: NaN/Inf coordinates, points outside
+/// the key range (|c| >= max_coord), e.g. moved there by a correction.
+inline void note_skipped_points(const std::string& input, std::size_t nonfinite,
+                                std::size_t out_of_range, double max_coord) {
+  if (nonfinite)
+    std::fprintf(stderr, "knnocc map: %s: skipped %zu points with NaN/Inf coordinates\n",
+                 input.c_str(), nonfinite);
+  if (out_of_range)
+    std::fprintf(stderr,
+                 "knnocc map: %s: skipped %zu points outside the map's key range (|c| >= %g m at "
+                 "--res %g); use a coarser --res (the library's WideKey maps reach 64x farther)\n",
+                 input.c_str(), out_of_range, max_coord, max_coord / 32768.0);
+}
+
+/// A warning (stderr) when clouds were read and the map holds no voxel: never silent.
+template <class Model>
+void note_empty_map(const std::string& input, std::size_t clouds, std::size_t points,
+                    const OccupancyMap<OcKey>& map, const Model&) {
+  if (clouds == 0 || map.count_voxels().known() > 0) return;
+  const char* why = std::is_same_v<Model, RobustModel>
+                        ? "; the robust model adds a map point's evidence only once --min-views "
+                          "keyframes have seen it"
+                        : "";
+  std::fprintf(stderr,
+               "knnocc map: %s: warning: the map is empty: the %zu points of %zu clouds updated no "
+               "voxel%s\n",
+               input.c_str(), points, clouds, why);
+}
+
 /// Prints `wrote A, B, ...` (nothing when no file was written).
 inline void print_written(const std::vector<std::string>& written) {
   if (written.empty()) return;
@@ -70,16 +100,18 @@ inline UpAxis up_axis(const Args& args, UpAxis estimated = {}) {
 }
 
 /// Writes every requested output (each atomically; io::Error names the file on failure) and
-/// adds its name to `written`. `title` names the map in pictures and pages.
+/// adds its name to `written`. `title` names the map in pictures and pages; `note` goes into the
+/// .bt/.ot headers (io::encode_bt).
 inline void write_map_outputs(const OccupancyMap<OcKey>& map, const Args& args, UpAxis up,
-                              const std::string& title, std::vector<std::string>& written) {
+                              const std::string& title, std::vector<std::string>& written,
+                              const std::string& note = {}) {
   auto done = [&](const char* flag) { written.push_back(args.str(flag)); };
   if (args.has("--out-bt")) {
-    io::write_bt(args.str("--out-bt"), map);
+    io::write_bt(args.str("--out-bt"), map, note);
     done("--out-bt");
   }
   if (args.has("--out-ot")) {
-    io::write_ot(args.str("--out-ot"), map);
+    io::write_ot(args.str("--out-ot"), map, note);
     done("--out-ot");
   }
   if (args.has("--out-ply")) {

@@ -1,5 +1,6 @@
 // knnocc sim: writes the simulated tree scene of the paper's experiment as a sequence folder.
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -14,6 +15,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "output_set.hpp"
+#include "resource_limits.hpp"
 
 namespace knnocc::cli {
 
@@ -40,7 +42,9 @@ and prints: keyframes N points N outliers N map_points N seen_once F
 (seen_once: fraction of the distinct map points within 4 m that one keyframe alone observes;
 ../shared/data/orbslam2_stereo_keyframes: 0.066, see `knnocc eval --ids`)
 DIR must be new or an empty folder: it is written aside (DIR.tmp-XXXXXX) and renamed when
-complete, so a failed run leaves no partial folder.
+complete, so a failed run leaves no partial folder. A run whose output would exceed 1 GB is
+refused before any work (with --drift the snapshots grow with the square of --keyframes: 10,000
+keyframes write about 0.9 GB).
 )";
   s.groups.push_back(
       {"options",
@@ -98,6 +102,18 @@ complete, so a failed run leaves no partial folder.
   return s;
 }
 
+/// The most `sim` writes: larger runs are refused before any work.
+constexpr double kMaxSimOutputBytes = 1e9;
+
+/// The bytes `sim` writes for n keyframes, estimated from its files: 6 kB of cloud per keyframe
+/// (twice with --drift: truth/), and with --drift 150 bytes per row of the snapshots (one after
+/// every tenth keyframe holding all keyframes so far, and the loop closure's: about n^2 / 20 rows).
+double sim_output_bytes(std::size_t n, bool drift) {
+  if (!drift) return 6e3 * double(n);
+  const double every = double(sim::DriftParams{}.local_every), k = std::floor(double(n) / every);
+  return 12e3 * double(n) + 150.0 * (every * k * (k + 1) / 2 + double(n));
+}
+
 sim::TreeSceneParams sim_params(const Args& args) {
   sim::Regime r;
   sim::find_regime(args.str("--regime"), r);
@@ -123,8 +139,15 @@ const CommandSpec& sim_spec() {
 
 int run_sim(const Args& args) {
   const std::string out = args.str("--out");
+  const sim::TreeSceneParams params = sim_params(args);
+  const double bytes = sim_output_bytes(params.keyframes, args.has("--drift"));
+  if (bytes > kMaxSimOutputBytes)
+    throw UsageError("--keyframes " + std::to_string(params.keyframes) +
+                     (args.has("--drift") ? " with --drift" : "") + " would write about " +
+                     format_bytes(bytes) + ", more than the " + format_bytes(kMaxSimOutputBytes) +
+                     " sim writes; use fewer keyframes");
   io::StagingDir stage(out);  // refuses a non-empty folder before any work; renamed at the end
-  sim::TreeScene scene(sim_params(args));
+  sim::TreeScene scene(params);
   const auto keyframes = scene.keyframes();
   std::vector<io::Pose> poses;
   std::vector<const io::Cloud*> clouds;

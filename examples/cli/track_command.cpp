@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "common_options.hpp"
+#include "input_guard.hpp"
 #include "output_set.hpp"
 #include "progress.hpp"
 
@@ -115,7 +117,9 @@ int run_track_with(const Args& args, const Policy& policy) {
   params.s_limit = args.number("--s-limit", std::numeric_limits<double>::infinity());
   const double crop = args.number("--crop", -1.0);
   const std::string stats_path = args.str("--out-stats");
-  check_outputs(requested_outputs(args, {"--out-stats", "--out-s"}));
+  const OutputList files = requested_outputs(args, {"--out-stats", "--out-s"});
+  check_outputs(files);
+  check_outputs_not_inputs(files, {{"--input", input}});
   use_memory_limit(args);
 
   const auto seq = io::Sequence::open(input);
@@ -129,7 +133,12 @@ int run_track_with(const Args& args, const Policy& policy) {
   Progress progress("track", seq.size());
   for (std::size_t i = 0; i < seq.size(); ++i) {
     io::keyframe_to_world(seq.pose(i), seq.load_cloud(i), crop, world, ids);
-    const ChangeSet cs = map_cloud.add(world, ids);
+    ChangeSet cs;
+    try {
+      cs = map_cloud.add(world, ids);
+    } catch (const std::invalid_argument& e) {  // ids repeated in the keyframe, or mixed
+      throw io::Error(seq.cloud_path(i), e.what());
+    }
     const auto a = std::chrono::steady_clock::now();
     const TrackerUpdate up = tracker.apply(cs);
     const double us =

@@ -10,6 +10,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "common_options.hpp"
+#include "input_guard.hpp"
 #include "map_files.hpp"
 #include "output_set.hpp"
 #include "view_page.hpp"
@@ -53,7 +54,7 @@ Prints `wrote FILE (N maps)`.
        ""});
   s.footer = "Exit status 2 on bad input (one line naming the file).\n";
   s.max_positional = kMaxViewMaps;
-  s.positional_limit_why = "maps fit on one page";
+  s.positional_limit_why = "maps fit one page";
   return s;
 }
 
@@ -96,7 +97,10 @@ const CommandSpec& view_spec() {
 int run_view(const Args& args) {
   if (args.positional().empty()) throw UsageError("needs at least one MAP (see --help)");
   const std::string out = args.str("--out");
+  OutputList inputs;
+  for (const std::string& in : args.positional()) inputs.emplace_back("MAP", in);
   check_outputs({{"--out", out}});
+  check_outputs_not_inputs({{"--out", out}}, inputs);
   const UpAxis up = args.has("--up") ? parse_up_axis(args.str("--up")) : UpAxis{};
   ViewOptions opt;
   opt.max_faces = static_cast<std::size_t>(args.integer("--max-faces"));

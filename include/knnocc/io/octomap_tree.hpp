@@ -63,6 +63,7 @@ struct OctreeInfo {
   std::uint64_t occupied_voxels = 0, free_voxels = 0;  ///< finest-level voxels the leaves cover
   int min_leaf_depth = 0, max_leaf_depth = 0;          ///< 0 when there are no leaves
   double min[3] = {0, 0, 0}, max[3] = {0, 0, 0};       ///< box of the leaves (metres)
+  std::string note;  ///< a "# knnocc <note>" header comment's note (see encode_bt), or empty
 };
 
 namespace detail {
@@ -131,7 +132,8 @@ class OctreeEncoder {
   using Map = OccupancyMap<OcKey>;
   using Brick = Map::Brick;
 
-  explicit OctreeEncoder(const Map& map) : map_(map) {}
+  /// `note`: the text of a "# knnocc <note>" header comment (made printable), or empty.
+  OctreeEncoder(const Map& map, const std::string& note) : map_(map), note_(note) {}
 
   /// The whole file: header and node stream.
   std::string encode() {
@@ -154,6 +156,7 @@ class OctreeEncoder {
     if (!order_.empty()) tree_node(0, 0, order_.size(), root);
 
     std::string out = std::string(Full ? kOtFirstLine : kBtFirstLine) + "\n" + kOctreeComment +
+                      (note_.empty() ? "" : kNotePrefix + printable(note_) + "\n") +
                       "id OcTree\nsize " + std::to_string(nodes_) + "\nres " +
                       format_resolution(map_.resolution()) + "\ndata\n";
     out += data_;
@@ -298,6 +301,7 @@ class OctreeEncoder {
   }
 
   const Map& map_;
+  std::string note_;
   std::vector<Entry> order_;
   std::string data_;
   std::uint64_t nodes_ = 0;
@@ -327,6 +331,7 @@ inline OctreeInfo inspect_octree(const std::string& path, const OccupancyParams&
       });
   info.binary = h.binary;
   info.id = h.id;
+  info.note = h.note;
   info.resolution = h.resolution;
   info.nodes = h.size;
   if (info.occupied_leaves + info.free_leaves == 0) {
@@ -377,23 +382,27 @@ inline OccupancyMap<OcKey> read_octree(const std::string& path,
   return map;
 }
 
-/// The bytes of `map` as liboctomap's OcTree::writeBinary would write them (.bt).
-inline std::string encode_bt(const OccupancyMap<OcKey>& map) {
-  return detail::OctreeEncoder<false>(map).encode();
+/// The bytes of `map` as liboctomap's OcTree::writeBinary would write them (.bt). A `note` adds
+/// the header comment "# knnocc <note>" (what wrote the file; OctoMap's readers skip comments,
+/// inspect_octree() returns it as OctreeInfo::note); without one the bytes are liboctomap's.
+inline std::string encode_bt(const OccupancyMap<OcKey>& map, const std::string& note = {}) {
+  return detail::OctreeEncoder<false>(map, note).encode();
 }
-/// The bytes of `map` as liboctomap's OcTree::write would write them (.ot).
-inline std::string encode_ot(const OccupancyMap<OcKey>& map) {
-  return detail::OctreeEncoder<true>(map).encode();
+/// The bytes of `map` as liboctomap's OcTree::write would write them (.ot); `note` as encode_bt.
+inline std::string encode_ot(const OccupancyMap<OcKey>& map, const std::string& note = {}) {
+  return detail::OctreeEncoder<true>(map, note).encode();
 }
 
-inline void write_bt(const std::string& path, const OccupancyMap<OcKey>& map) {
+inline void write_bt(const std::string& path, const OccupancyMap<OcKey>& map,
+                     const std::string& note = {}) {
   AtomicFile out(path);
-  out.write(encode_bt(map));
+  out.write(encode_bt(map, note));
   out.commit();
 }
-inline void write_ot(const std::string& path, const OccupancyMap<OcKey>& map) {
+inline void write_ot(const std::string& path, const OccupancyMap<OcKey>& map,
+                     const std::string& note = {}) {
   AtomicFile out(path);
-  out.write(encode_ot(map));
+  out.write(encode_ot(map, note));
   out.commit();
 }
 

@@ -93,6 +93,34 @@ class LiveMapper {
   /// Bytes held by the stored keyframes (the map's own memory: map().memory_usage()).
   std::size_t keyframe_memory() const { return store_.memory_usage(); }
 
+  /// The points of the current keyframes at their current poses as a from-scratch Mapper counts
+  /// them (ScanStats points, nonfinite, out_of_range, beyond_max_range, summed): e.g. the points a
+  /// correction moved outside the key range, which the map holds no update from.
+  ScanStats point_counts() const {
+    ScanStats s;
+    for (const keyframe_type& kf : store_.frames()) {
+      const Point3f o = detail::to_point3f(pose_traits<Pose>::origin(kf.pose));
+      for (const Point3f& p : kf.points) {
+        ++s.points;
+        const Point3f q = detail::to_point3f(pose_traits<Pose>::to_world(kf.pose, p));
+        switch (detail::endpoint_fate(mapper_->map().grid(), q, o, options_.max_range)) {
+          case detail::EndpointFate::nonfinite:
+            ++s.nonfinite;
+            break;
+          case detail::EndpointFate::beyond_max_range:
+            ++s.beyond_max_range;
+            break;
+          case detail::EndpointFate::out_of_range:
+            ++s.out_of_range;
+            break;
+          case detail::EndpointFate::inserted:
+            break;
+        }
+      }
+    }
+    return s;
+  }
+
   /// Bounds the memory of the map (OccupancyMap::set_memory_limit; 0: no bound), now and of every
   /// map built later: rebuilds and the scratch maps of regional replays. An operation that would
   /// pass it throws MemoryLimitError; the keyframes then hold the operation's result but the map
@@ -106,7 +134,8 @@ class LiveMapper {
   /// Adds keyframe `id` (new id) seen from `pose`; `points` in the sensor frame; `ids` one
   /// map-point id per point or empty (k-NN model: a sequence gives ids always or never; the
   /// OctoMap model ignores them). std::invalid_argument, with nothing changed, on a known id, a
-  /// non-finite pose origin, an id count that does not match, id 2^64-1, or ids mixed.
+  /// non-finite pose origin, an id count that does not match, id 2^64-1, an id repeated within
+  /// the keyframe, or ids mixed.
   void add(std::uint64_t id, const Pose& pose, std::vector<Point3f> points,
            std::vector<std::uint64_t> ids = {}) {
     if (store_.contains(id)) detail::invalid_argument("LiveMapper::add: keyframe id already added");
@@ -117,6 +146,8 @@ class LiveMapper {
       for (const std::uint64_t m : ids)
         if (m == KeyframeUnion::kNoId)
           detail::invalid_argument("LiveMapper::add: id 2^64-1 is reserved");
+      std::vector<std::uint64_t> scratch;
+      detail::check_distinct_ids("LiveMapper::add", ids, scratch);
       if (!points.empty() && ((ids.empty() && with_ids_ > 0) || (!ids.empty() && without_ids_ > 0)))
         detail::invalid_argument("LiveMapper::add: keyframes with and without ids are mixed");
       if (!points.empty()) ++(ids.empty() ? without_ids_ : with_ids_);

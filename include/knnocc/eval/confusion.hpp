@@ -1,0 +1,183 @@
+#pragma once
+// The authors' counting (Miao et al., Sensors 22(1):139, 2022): a map against a reference map,
+// cell by cell, for every finest-level cell known in both, with a tolerance of one voxel that
+// each reference cell grants once.
+//
+//   TP  occupied in the map and matched to an occupied reference cell within +-1 voxel along each
+//       axis (the cell itself or one of its 26 neighbours); the matching is one-to-one
+//   FP  occupied in the map and left unmatched
+//   FN  free in the map, occupied in the reference, and no TP matched to it
+//   TN  free in the map and free in the reference
+// A free map cell that is occupied in the reference but was matched (its surface is in the map,
+// one voxel off) counts in none of them. The reference cell a TP is matched to may be unknown in
+// the map: the tolerance is about where the map put the surface.
+//
+// Matching: a maximum bipartite matching (Hopcroft-Karp), not a greedy pass, so the counts do not
+// depend on the order cells are visited in. Among the maximum matchings it takes one that covers
+// as many FN candidates (reference-occupied cells the map calls free) as any matching can: TP is
+// the largest number of occupied map cells that can be matched one-to-one, FN the smallest number
+// of FN candidates that must stay unmatched; both are properties of the two maps, not of a
+// visiting order (eval/detail/bipartite_matching.hpp says why the two stages give both). The
+// authors' code was not found; a greedy matching in their order can give fewer TP, never more.
+//
+// The reference is any type with (the voxel-reference concept)
+//   bool known(const Key&) const;      the reference says something about the cell
+//   bool occupied(const Key&) const;   it is occupied there (asked only for known cells)
+// MapVoxels (another map), ShapeVoxels below (reference shapes voxelised) and PointVoxels
+// (eval/reference_points.hpp: a reference point set) are three.
+//
+// Thread safety: const functions of const objects; may run concurrently.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "../core/key.hpp"
+#include "../core/point3.hpp"
+#include "../map/occupancy_map.hpp"
+#include "detail/bipartite_matching.hpp"
+#include "reference.hpp"
+
+namespace knnocc::eval {
+
+struct ConfusionCounts {
+  std::size_t tp = 0, fp = 0, tn = 0, fn = 0;
+
+  double precision() const { return tp + fp ? double(tp) / double(tp + fp) : 0.0; }
+  double recall() const { return tp + fn ? double(tp) / double(tp + fn) : 0.0; }
+  /// 2 TP / (2 TP + FP + FN); 0 when all three are 0.
+  double f1() const {
+    const double d = 2.0 * double(tp) + double(fp) + double(fn);
+    return d > 0 ? 2.0 * double(tp) / d : 0.0;
+  }
+  /// Matthews correlation coefficient; 0 when a marginal is empty.
+  double mcc() const {
+    const double a = double(tp), b = double(fp), c = double(tn), d = double(fn);
+    const double den = (a + b) * (a + d) * (c + b) * (c + d);
+    return den > 0 ? (a * c - b * d) / std::sqrt(den) : 0.0;
+  }
+  ConfusionCounts& operator+=(const ConfusionCounts& o) {
+    tp += o.tp;
+    fp += o.fp;
+    tn += o.tn;
+    fn += o.fn;
+    return *this;
+  }
+};
+
+struct ConfusionOptions {
+  /// Occupied in the map iff log-odds >= this; empty: the map's own occupancy threshold (an
+  /// evaluation over thresholds maps once and counts several times).
+  std::optional<float> threshold;
+};
+
+/// A map as a voxel reference: known and occupied as the map says.
+template <class Key>
+class MapVoxels {
+ public:
+  explicit MapVoxels(const OccupancyMap<Key>& map) : map_(&map) {}
+  bool known(const Key& k) const { return map_->is_known(k); }
+  bool occupied(const Key& k) const { return map_->is_occupied(k).value_or(false); }
+
+ private:
+  const OccupancyMap<Key>* map_;
+};
+
+/// Reference shapes (eval/reference.hpp) voxelised on a grid, known everywhere: a cell is
+/// occupied when its closed box meets a solid (on its surface or inside it) or reaches down to
+/// the ground plane (z_lo <= ground z: the ground and what lies under it), free otherwise. Cells
+/// inside a solid are occupied because carving them is wrong; the camera never sees them free.
+template <class Key>
+class ShapeVoxels {
+ public:
+  ShapeVoxels(const Reference& ref, const Grid<Key>& grid) : ref_(&ref), grid_(grid) {}
+  bool known(const Key&) const { return true; }
+  bool occupied(const Key& k) const {
+    const double r = grid_.resolution();
+    const Point3d c{grid_.index_to_coord(k[0]), grid_.index_to_coord(k[1]),
+                    grid_.index_to_coord(k[2])};
+    if (ref_->has_ground && c.z - r / 2 <= ref_->ground_z) return true;
+    return ref_->relation({c.x - r / 2, c.y - r / 2, c.z - r / 2},
+                          {c.x + r / 2, c.y + r / 2, c.z + r / 2}) != BoxRelation::outside;
+  }
+
+ private:
+  const Reference* ref_;
+  Grid<Key> grid_;
+};
+
+namespace detail {
+
+// The 27 offsets of the tolerance, the cell itself first.
+inline const std::vector<std::array<int, 3>>& tolerance_offsets() {
+  static const std::vector<std::array<int, 3>> offsets = [] {
+    std::vector<std::array<int, 3>> o{{0, 0, 0}};
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz)
+          if (dx || dy || dz) o.push_back({dx, dy, dz});
+    return o;
+  }();
+  return offsets;
+}
+
+}  // namespace detail
+
+/// The authors' counting of `map` against `ref` (a voxel reference on the map's grid).
+template <class Key, class Ref>
+ConfusionCounts count_confusion(const OccupancyMap<Key>& map, const Ref& ref,
+                                const ConfusionOptions& opt = {}) {
+  ConfusionCounts c;
+  auto occupied = [&](float v) { return opt.threshold ? v >= *opt.threshold : map.is_occupied(v); };
+  std::vector<Key> left, candidates;  // occupied map cells; free map cells occupied in ref
+  map.for_each_voxel([&](const Key& k, float v) {
+    if (!ref.known(k)) return;
+    if (occupied(v))
+      left.push_back(k);
+    else if (ref.occupied(k))
+      candidates.push_back(k);
+    else
+      ++c.tn;
+  });
+  auto by_key = [](const Key& a, const Key& b) { return a.pack() < b.pack(); };
+  std::sort(left.begin(), left.end(), by_key);  // a fixed order, for reproducible matchings
+  const std::unordered_set<Key, KeyHash> candidate_set(candidates.begin(), candidates.end());
+
+  // Right vertices: occupied reference cells within the tolerance of an occupied map cell.
+  std::unordered_map<Key, std::uint32_t, KeyHash> right;
+  std::vector<unsigned char> is_candidate;
+  std::vector<std::uint32_t> offsets{0}, adj;
+  for (const Key& k : left) {
+    for (const auto& d : detail::tolerance_offsets()) {
+      Key n;
+      if (!shifted_key(k, d[0], d[1], d[2], n)) continue;
+      auto it = right.find(n);
+      if (it == right.end()) {
+        if (!ref.known(n) || !ref.occupied(n)) continue;
+        it = right.emplace(n, static_cast<std::uint32_t>(right.size())).first;
+        is_candidate.push_back(candidate_set.count(n) > 0);
+      }
+      adj.push_back(it->second);
+    }
+    offsets.push_back(static_cast<std::uint32_t>(adj.size()));
+  }
+  eval::detail::BipartiteMatching m(right.size(), std::move(offsets), std::move(adj));
+  m.augment([&](std::uint32_t v) { return is_candidate[v] != 0; });  // FN candidates first
+  m.augment([](std::uint32_t) { return true; });
+  c.tp = m.size();
+  c.fp = left.size() - c.tp;
+  std::size_t covered = 0;
+  for (std::size_t v = 0; v < is_candidate.size(); ++v)
+    covered += is_candidate[v] && m.match_of_right(v) != eval::detail::BipartiteMatching::kNone;
+  c.fn = candidates.size() - covered;
+  return c;
+}
+
+}  // namespace knnocc::eval

@@ -17,6 +17,8 @@
 #include <knnocc/map/occupancy_map.hpp>
 
 #include "args.hpp"
+#include "eval_heldout.hpp"
+#include "eval_points.hpp"
 #include "map_outputs.hpp"  // lower_extension
 #include "resource_limits.hpp"
 
@@ -24,8 +26,11 @@ namespace knnocc::cli {
 
 inline const char* eval_help() {
   return R"(usage: knnocc eval --map FILE --reference FILE [--res R] [--inflate M] [--ground-band M]
+       knnocc eval --map FILE --reference POINTS.ply [--seen-by SEQ [--crop M]] [--res R]
        knnocc eval --ids SEQ [--map FILE [--against FILE]] [--crop M] [--res R] [--min-views N]
                    [--far M]
+       knnocc eval --heldout SEQ [--model octomap|knn|robust|all] [--folds F] [--res R]
+                   [--crop M] [--min-views N]
 
 Compares a map (an OctoMap .bt/.ot file, or a voxel list from `knnocc map --out-voxels`: x y z
 logodds per finest voxel, which needs --res; occupied = logodds >= 0) with reference shapes (`reference.txt` from `knnocc sim`: ground,
@@ -40,6 +45,23 @@ ellipsoid and cuboid lines) and prints the paper's Table 1 metrics on one line:
   evaluated    occupied voxels above the ground band; precision = 1 - irrelevant / evaluated
   shell_recall in_shell / shell
   free_inside  free voxels entirely inside a shape (space wrongly carved)
+and the authors' counting (Miao et al., Sensors 2022) on a second line:
+  tp N fp N tn N fn N f1 X mcc X
+  over the voxels known in the map: TP occupied and matched one-to-one (a maximum matching) to
+  a reference-occupied voxel within one voxel along each axis, FP the other occupied ones, FN
+  free but reference-occupied and matched by no TP, TN free in both; the reference shapes are
+  voxelised everywhere: a voxel is occupied when it meets a shape (surface or inside) or reaches
+  down to the ground, free otherwise.
+
+Against reference points (--reference .ply/.pcd/.xyz, e.g. a room model's vertices):
+  reference_points N cells N occupied N near N precision X visible N covered N recall X
+  near     occupied voxels within one voxel of a reference point    (precision = near/occupied)
+  visible  reference voxels within one voxel of a point of --seen-by SEQ (a sequence folder,
+           --crop M as in `knnocc map`); every reference voxel without --seen-by
+  covered  visible reference voxels within one voxel of an occupied voxel (recall)
+  then the counting line against the points' voxels (free: the rest of their bounding box grown
+  by a voxel). Vertices alone put a flat face's points at its corners: distances to them are
+  upper bounds, so precision is a lower bound and FP, FN are upper bounds.
 
 Without ground truth (--ids SEQ: a sequence folder whose clouds carry map-point ids, e.g. ORB-SLAM
 keyframes; --crop M keeps the points within M of their camera, as `knnocc map --crop`): prints
@@ -53,6 +75,18 @@ keyframes; --crop M keeps the points within M of their camera, as `knnocc map --
   lost            of those, not occupied in --map
   free_multiview  multi-view voxels that are free in --map
   far             occupied voxels farther than --far (0.3 m) from every multi-view voxel
+
+Held-out (--heldout SEQ: a sequence with map-point ids): the keyframes split into --folds F
+(default 5) interleaved folds (fold f: keyframes i with i % F == f); each fold is scored against
+a map of the other folds' keyframes, built with --model (default all: one line each) at --res
+(default 0.1) with the model's defaults, as `knnocc map` builds it; sums over the folds:
+  heldout MODEL folds F points N recall X rays N seen_through N occupied N seen_through_share X
+  points        map points that >= --min-views (2) held-out keyframes observe
+  recall        of those, the share whose voxel is occupied
+  rays          the held-out rays to those points
+  seen_through  occupied voxels such a ray passes through before its end voxel (data the map was
+                not built from saw them empty), and their share of the occupied voxels
+It needs no ground truth and no rule of any model.
 )";
 }
 
@@ -136,12 +170,14 @@ inline int run_eval_ids(const Args& args) {
 inline int run_eval(const std::vector<std::string>& argv) {
   const Args args(argv,
                   {"--map", "--reference", "--res", "--inflate", "--ground-band", "--ids",
-                   "--against", "--crop", "--min-views", "--far"},
+                   "--against", "--crop", "--min-views", "--far", "--heldout", "--model", "--folds",
+                   "--seen-by", "--margin"},
                   {});
   if (args.help()) {
     std::fputs(eval_help(), stdout);
     return 0;
   }
+  if (args.has("--heldout")) return run_eval_heldout(args);
   if (args.has("--ids")) return run_eval_ids(args);
   const std::string map_path = args.required("--map");
   const std::string ref_path = args.required("--reference");
@@ -150,6 +186,8 @@ inline int run_eval(const std::vector<std::string>& argv) {
   opt.ground_band = args.number("--ground-band", opt.ground_band);
   if (!(opt.inflate >= 0) || !(opt.ground_band >= 0))
     throw UsageError("--inflate and --ground-band must be >= 0");
+  if (is_point_reference(ref_path))
+    return run_eval_points(args, read_map(args, map_path), ref_path);
   const eval::Reference ref = eval::read_reference(ref_path);
   const OccupancyMap<OcKey> map = read_map(args, map_path);
   const eval::Metrics m = eval::evaluate(map, ref, opt);
@@ -158,6 +196,7 @@ inline int run_eval(const std::vector<std::string>& argv) {
       "precision %.4f shell_recall %.4f free_inside %zu\n",
       m.occupied, m.free, m.shell, m.in_shell, m.covered, m.irrelevant, m.evaluated, m.precision(),
       m.shell_recall(), m.free_inside);
+  print_confusion(eval::count_confusion(map, eval::ShapeVoxels<OcKey>(ref, map.grid())));
   return 0;
 }
 

@@ -22,6 +22,7 @@
 //
 // Thread safety: functions of their arguments only.
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <unordered_map>
@@ -47,6 +48,8 @@ struct IdKeyframe {
 struct HeldoutOptions {
   std::size_t folds = 5;        ///< interleaved folds (>= 2)
   std::uint32_t min_views = 2;  ///< held-out keyframes that must observe a scored map point
+  /// The walk stops this far (m) before the point: 0 walks the whole ray up to the end voxel.
+  double end_margin = 0.0;
 };
 
 struct HeldoutScore {
@@ -112,7 +115,15 @@ HeldoutScore score_heldout(const OccupancyMap<Key>& map, const std::vector<IdKey
     for (std::size_t j = 0; j < kf.points.size() && j < kf.ids.size(); ++j) {
       if (seen.at(kf.ids[j]).views < opt.min_views) continue;
       ++s.rays;
-      for_each_ray_key(g, o, knnocc::detail::to_point3f(kf.points[j]), [&](const Key& k) {
+      Point3d end = kf.points[j];
+      if (opt.end_margin > 0) {
+        const double dx = end.x - kf.origin.x, dy = end.y - kf.origin.y, dz = end.z - kf.origin.z;
+        const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+        if (len <= opt.end_margin) continue;
+        const double f = (len - opt.end_margin) / len;
+        end = {kf.origin.x + f * dx, kf.origin.y + f * dy, kf.origin.z + f * dz};
+      }
+      for_each_ray_key(g, o, knnocc::detail::to_point3f(end), [&](const Key& k) {
         if (map.is_occupied(k).value_or(false)) through.insert(k);
       });
     }

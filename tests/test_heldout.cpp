@@ -85,6 +85,7 @@ TEST_CASE("heldout: recall and seen-through voxels equal a brute force with dens
     const std::vector<std::size_t> heldout{1, 3, 4, 6};
     eval::HeldoutOptions opt;
     opt.min_views = 2 + trial % 2;
+    opt.end_margin = trial % 3 == 2 ? 0.15 : 0.0;
     std::vector<OcKey> walked;
     const eval::HeldoutScore s = eval::score_heldout(map, kfs, heldout, opt, &walked);
 
@@ -114,8 +115,16 @@ TEST_CASE("heldout: recall and seen-through voxels equal a brute force with dens
       for (std::size_t j = 0; j < kf.ids.size(); ++j) {
         if (observers.at(kf.ids[j]).size() < opt.min_views) continue;
         ++rays;
-        const double ex = float(kf.points[j].x), ey = float(kf.points[j].y),
-                     ez = float(kf.points[j].z);
+        // the walk's end: the point, or end_margin short of it
+        Point3d e = kf.points[j];
+        const double dx = e.x - kf.origin.x, dy = e.y - kf.origin.y, dz = e.z - kf.origin.z;
+        const double full = std::sqrt(dx * dx + dy * dy + dz * dz);
+        if (opt.end_margin > 0) {
+          if (full <= opt.end_margin) continue;
+          const double f = (full - opt.end_margin) / full;
+          e = {kf.origin.x + f * dx, kf.origin.y + f * dy, kf.origin.z + f * dz};
+        }
+        const double ex = float(e.x), ey = float(e.y), ez = float(e.z);
         segments.push_back({ox, oy, oz, ex, ey, ez});
         OcKey end;
         REQUIRE(key_of(res, ex, ey, ez, end));

@@ -35,13 +35,14 @@ bool within_one(const OcKey& a, const OcKey& b) {
 // The counting from its definition: every one-to-one matching of occupied map cells (known in
 // the reference) to occupied reference cells within +-1 voxel tried, the best by (TP, then FN
 // candidates covered) kept.
-eval::ConfusionCounts brute_force(const OccupancyMap<OcKey>& map, const OccupancyMap<OcKey>& ref) {
+eval::ConfusionCounts brute_force(const OccupancyMap<OcKey>& map, const OccupancyMap<OcKey>& ref,
+                                  float threshold = 0.0f) {
   std::vector<OcKey> left, right, cand;
   eval::ConfusionCounts c;
   map.for_each_voxel([&](const OcKey& k, float v) {
     const auto r = ref.logodds(k);
     if (!r) return;
-    if (map.is_occupied(v))
+    if (v >= threshold)
       left.push_back(k);
     else if (ref.is_occupied(*r))
       cand.push_back(k);
@@ -105,7 +106,7 @@ TEST_CASE("confusion: the counting equals an exhaustive search over matchings on
   std::mt19937_64 rng(33);
   std::uniform_int_distribution<int> x(0, 4), y(0, 3), z(0, 1);
   std::uniform_real_distribution<float> v(-2.0f, 2.0f);
-  std::size_t tp = 0, fn = 0, several = 0;
+  std::size_t tp = 0, fn = 0, matched_maps = 0;
   for (int trial = 0; trial < 300; ++trial) {
     OccupancyMap<OcKey> map(0.1), ref(0.1);
     const int cells = 4 + trial % 12;
@@ -114,13 +115,19 @@ TEST_CASE("confusion: the counting equals an exhaustive search over matchings on
     const eval::ConfusionCounts got = eval::count_confusion(map, eval::MapVoxels<OcKey>(ref));
     const eval::ConfusionCounts want = brute_force(map, ref);
     check_equal(got, want);
+    // Several thresholds in one call: each as by itself.
+    const std::vector<float> thresholds{0.7f, -0.5f, 0.0f, 1.5f};
+    const auto several = eval::count_confusion(map, eval::MapVoxels<OcKey>(ref), thresholds);
+    REQUIRE(several.size() == thresholds.size());
+    for (std::size_t t = 0; t < thresholds.size(); ++t)
+      check_equal(several[t], brute_force(map, ref, thresholds[t]));
     tp += got.tp;
     fn += got.fn;
-    several += got.tp > 1;
+    matched_maps += got.tp > 1;
   }
   MESSAGE("300 random maps: " << tp << " TP, " << fn << " FN");
   CHECK(tp > 300);  // the maps exercise the matching, not only the empty case
-  CHECK(several > 50);
+  CHECK(matched_maps > 50);
 }
 
 TEST_CASE("confusion: one voxel of tolerance, each reference cell granted once") {

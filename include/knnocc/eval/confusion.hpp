@@ -35,8 +35,6 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
-#include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 #include "../core/key.hpp"
@@ -97,13 +95,18 @@ class MapVoxels {
 template <class Key>
 class ShapeVoxels {
  public:
-  ShapeVoxels(const Reference& ref, const Grid<Key>& grid) : ref_(&ref), grid_(grid) {}
+  ShapeVoxels(const Reference& ref, const Grid<Key>& grid) : ref_(&ref), grid_(grid) {
+    ref.bounds(grid.resolution(), lo_, hi_);  // no solid reaches a voxel centred outside these
+  }
   bool known(const Key&) const { return true; }
   bool occupied(const Key& k) const {
     const double r = grid_.resolution();
     const Point3d c{grid_.index_to_coord(k[0]), grid_.index_to_coord(k[1]),
                     grid_.index_to_coord(k[2])};
     if (ref_->has_ground && c.z - r / 2 <= ref_->ground_z) return true;
+    if (!(c.x >= lo_.x && c.x <= hi_.x && c.y >= lo_.y && c.y <= hi_.y && c.z >= lo_.z &&
+          c.z <= hi_.z))
+      return false;
     return ref_->relation({c.x - r / 2, c.y - r / 2, c.z - r / 2},
                           {c.x + r / 2, c.y + r / 2, c.z + r / 2}) != BoxRelation::outside;
   }
@@ -111,6 +114,7 @@ class ShapeVoxels {
  private:
   const Reference* ref_;
   Grid<Key> grid_;
+  Point3d lo_, hi_;  // the solids' bounding box grown by a voxel
 };
 
 namespace detail {
@@ -130,54 +134,110 @@ inline const std::vector<std::array<int, 3>>& tolerance_offsets() {
 
 }  // namespace detail
 
+/// The authors' counting of `map` against `ref` (a voxel reference on the map's grid) at several
+/// occupancy thresholds (log-odds: occupied iff >= threshold) at once, one count per threshold;
+/// the map's cells are classified against the reference, and the edges found, once.
+template <class Key, class Ref>
+std::vector<ConfusionCounts> count_confusion(const OccupancyMap<Key>& map, const Ref& ref,
+                                             const std::vector<float>& thresholds) {
+  if (thresholds.empty()) return {};
+  const float lowest = *std::min_element(thresholds.begin(), thresholds.end());
+  // The cells known in both: the ones occupied at the lowest threshold (the only ones that can
+  // be left vertices), and the values of the free ones occupied in the reference.
+  struct Left {
+    Key key;
+    float value;
+    bool ref_occupied;
+  };
+  std::vector<Left> occupied;
+  std::vector<float> free_in_ref_occupied, free_in_ref_free;
+  map.for_each_voxel([&](const Key& k, float v) {
+    if (!ref.known(k)) return;
+    const bool o = ref.occupied(k);
+    if (v >= lowest)
+      occupied.push_back({k, v, o});
+    else
+      (o ? free_in_ref_occupied : free_in_ref_free).push_back(v);
+  });
+  // A fixed order, for reproducible matchings.
+  std::sort(occupied.begin(), occupied.end(),
+            [](const Left& a, const Left& b) { return a.key.pack() < b.key.pack(); });
+
+  // Right vertices: occupied reference cells within the tolerance of those cells, numbered in
+  // key order, with their value in the map (NaN: unknown there); the edges once.
+  std::vector<std::uint64_t> near;
+  for (const Left& l : occupied)
+    for (const auto& d : detail::tolerance_offsets()) {
+      Key n;
+      if (shifted_key(l.key, d[0], d[1], d[2], n)) near.push_back(n.pack());
+    }
+  std::sort(near.begin(), near.end());
+  near.erase(std::unique(near.begin(), near.end()), near.end());
+  constexpr std::uint32_t kNone = eval::detail::BipartiteMatching::kNone;
+  std::vector<std::uint32_t> right(near.size(), kNone);  // index in near -> right vertex
+  std::vector<float> right_value;
+  for (std::size_t i = 0; i < near.size(); ++i) {
+    const Key n = Key::unpack(near[i]);
+    if (!ref.known(n) || !ref.occupied(n)) continue;
+    right[i] = static_cast<std::uint32_t>(right_value.size());
+    const auto v = map.logodds(n);
+    right_value.push_back(v ? *v : std::numeric_limits<float>::quiet_NaN());
+  }
+  std::vector<std::uint32_t> all_offsets{0}, all_adj;
+  for (const Left& l : occupied) {
+    for (const auto& d : detail::tolerance_offsets()) {
+      Key n;
+      if (!shifted_key(l.key, d[0], d[1], d[2], n)) continue;
+      const auto i = std::lower_bound(near.begin(), near.end(), n.pack()) - near.begin();
+      if (right[static_cast<std::size_t>(i)] != kNone)
+        all_adj.push_back(right[static_cast<std::size_t>(i)]);
+    }
+    all_offsets.push_back(static_cast<std::uint32_t>(all_adj.size()));
+  }
+
+  std::vector<ConfusionCounts> out;
+  for (const float threshold : thresholds) {
+    ConfusionCounts c;
+    std::size_t candidates = 0;  // free map cells occupied in the reference
+    for (const float v : free_in_ref_occupied) candidates += v < threshold;
+    c.tn = free_in_ref_free.size();
+    std::vector<std::uint32_t> offsets{0}, adj;
+    for (std::size_t u = 0; u < occupied.size(); ++u) {
+      if (occupied[u].value >= threshold) {
+        adj.insert(adj.end(), all_adj.begin() + all_offsets[u],
+                   all_adj.begin() + all_offsets[u + 1]);
+        offsets.push_back(static_cast<std::uint32_t>(adj.size()));
+      } else if (occupied[u].ref_occupied) {
+        ++candidates;
+      } else {
+        ++c.tn;
+      }
+    }
+    std::vector<unsigned char> is_candidate(right_value.size());  // free in the map
+    for (std::size_t v = 0; v < right_value.size(); ++v)
+      is_candidate[v] = right_value[v] < threshold;
+    const std::size_t left = offsets.size() - 1;
+    eval::detail::BipartiteMatching m(right_value.size(), std::move(offsets), std::move(adj));
+    m.augment([&](std::uint32_t v) { return is_candidate[v] != 0; });  // FN candidates first
+    m.augment([](std::uint32_t) { return true; });
+    c.tp = m.size();
+    c.fp = left - c.tp;
+    std::size_t covered = 0;
+    for (std::size_t v = 0; v < is_candidate.size(); ++v)
+      covered += is_candidate[v] && m.match_of_right(v) != kNone;
+    c.fn = candidates - covered;
+    out.push_back(c);
+  }
+  return out;
+}
+
 /// The authors' counting of `map` against `ref` (a voxel reference on the map's grid).
 template <class Key, class Ref>
 ConfusionCounts count_confusion(const OccupancyMap<Key>& map, const Ref& ref,
                                 const ConfusionOptions& opt = {}) {
-  ConfusionCounts c;
-  auto occupied = [&](float v) { return opt.threshold ? v >= *opt.threshold : map.is_occupied(v); };
-  std::vector<Key> left, candidates;  // occupied map cells; free map cells occupied in ref
-  map.for_each_voxel([&](const Key& k, float v) {
-    if (!ref.known(k)) return;
-    if (occupied(v))
-      left.push_back(k);
-    else if (ref.occupied(k))
-      candidates.push_back(k);
-    else
-      ++c.tn;
-  });
-  auto by_key = [](const Key& a, const Key& b) { return a.pack() < b.pack(); };
-  std::sort(left.begin(), left.end(), by_key);  // a fixed order, for reproducible matchings
-  const std::unordered_set<Key, KeyHash> candidate_set(candidates.begin(), candidates.end());
-
-  // Right vertices: occupied reference cells within the tolerance of an occupied map cell.
-  std::unordered_map<Key, std::uint32_t, KeyHash> right;
-  std::vector<unsigned char> is_candidate;
-  std::vector<std::uint32_t> offsets{0}, adj;
-  for (const Key& k : left) {
-    for (const auto& d : detail::tolerance_offsets()) {
-      Key n;
-      if (!shifted_key(k, d[0], d[1], d[2], n)) continue;
-      auto it = right.find(n);
-      if (it == right.end()) {
-        if (!ref.known(n) || !ref.occupied(n)) continue;
-        it = right.emplace(n, static_cast<std::uint32_t>(right.size())).first;
-        is_candidate.push_back(candidate_set.count(n) > 0);
-      }
-      adj.push_back(it->second);
-    }
-    offsets.push_back(static_cast<std::uint32_t>(adj.size()));
-  }
-  eval::detail::BipartiteMatching m(right.size(), std::move(offsets), std::move(adj));
-  m.augment([&](std::uint32_t v) { return is_candidate[v] != 0; });  // FN candidates first
-  m.augment([](std::uint32_t) { return true; });
-  c.tp = m.size();
-  c.fp = left.size() - c.tp;
-  std::size_t covered = 0;
-  for (std::size_t v = 0; v < is_candidate.size(); ++v)
-    covered += is_candidate[v] && m.match_of_right(v) != eval::detail::BipartiteMatching::kNone;
-  c.fn = candidates.size() - covered;
-  return c;
+  return count_confusion(
+      map, ref,
+      std::vector<float>{opt.threshold ? *opt.threshold : map.params().occupancy_threshold})[0];
 }
 
 }  // namespace knnocc::eval

@@ -178,25 +178,40 @@ TEST_CASE("confusion: one voxel of tolerance, each reference cell granted once")
   }
 }
 
-TEST_CASE("confusion: shapes voxelised: surface, inside and under the ground occupied") {
+TEST_CASE("confusion: shapes voxelised: surface and inside occupied, the ground band unknown") {
   eval::Reference ref;
   ref.has_ground = true;
   ref.ground_z = 0.0;
-  ref.cuboids.push_back({{0.25, 0.25, 0.0}, {0.75, 0.75, 0.5}});
+  ref.cuboids.push_back({{0.25, 0.25, 0.0}, {0.75, 0.75, 0.75}});
   const Grid<OcKey> g(0.1);
   const eval::ShapeVoxels<OcKey> shapes(ref, g);
   OcKey k;
-  auto occ = [&](double xx, double yy, double zz) {
+  auto at = [&](double xx, double yy, double zz) {
     REQUIRE(g.coord_to_key(xx, yy, zz, k));
-    CHECK(shapes.known(k));
-    return shapes.occupied(k);
+    return k;
   };
-  CHECK(occ(0.45, 0.45, 0.25));        // inside
-  CHECK(occ(0.25, 0.45, 0.25));        // on a face
-  CHECK_FALSE(occ(0.05, 0.45, 0.25));  // beside it
-  CHECK(occ(2.0, 2.0, 0.05));          // the ground's voxel (z 0..0.1)
-  CHECK(occ(2.0, 2.0, -0.35));         // under the ground
-  CHECK_FALSE(occ(2.0, 2.0, 0.15));
+  CHECK(shapes.occupied(at(0.45, 0.45, 0.45)));        // inside
+  CHECK(shapes.occupied(at(0.25, 0.45, 0.45)));        // on a face
+  CHECK_FALSE(shapes.occupied(at(0.05, 0.45, 0.45)));  // beside it
+  CHECK(shapes.known(at(0.05, 0.45, 0.45)));
+  CHECK_FALSE(shapes.known(at(2.0, 2.0, 0.05)));  // the ground band (centres below 0.3 m)
+  CHECK_FALSE(shapes.known(at(2.0, 2.0, 0.25)));
+  CHECK_FALSE(shapes.known(at(2.0, 2.0, -0.35)));  // under the ground
+  CHECK(shapes.known(at(2.0, 2.0, 0.35)));
+  CHECK_FALSE(shapes.occupied(at(2.0, 2.0, 0.35)));
+  // Against a brute force: a voxel is occupied iff a sample of its closed box lies in the solid.
+  for (int x = -2; x < 10; ++x)
+    for (int y = -2; y < 10; ++y)
+      for (int z = 3; z < 10; ++z) {
+        const OcKey key = at((x + 0.5) * 0.1, (y + 0.5) * 0.1, (z + 0.5) * 0.1);
+        bool inside = false;
+        for (int s = 0; s <= 4 && !inside; ++s)
+          for (int t = 0; t <= 4 && !inside; ++t)
+            for (int u = 0; u <= 4 && !inside; ++u)
+              inside =
+                  ref.contains({(x + s / 4.0) * 0.1, (y + t / 4.0) * 0.1, (z + u / 4.0) * 0.1});
+        CHECK(shapes.occupied(key) == inside);
+      }
 }
 
 TEST_CASE("reference points: precision and recall equal a brute-force distance count") {

@@ -50,8 +50,8 @@ and the authors' counting (Miao et al., Sensors 2022) on a second line:
   over the voxels known in the map: TP occupied and matched one-to-one (a maximum matching) to
   a reference-occupied voxel within one voxel along each axis, FP the other occupied ones, FN
   free but reference-occupied and matched by no TP, TN free in both; the reference shapes are
-  voxelised everywhere: a voxel is occupied when it meets a shape (surface or inside) or reaches
-  down to the ground, free otherwise.
+  voxelised: a voxel is occupied when it meets a shape (surface or inside), free otherwise, and
+  unknown (not counted) in the ground band (centres less than 0.3 m above the ground, or below).
 
 Against reference points (--reference .ply/.pcd/.xyz, e.g. a room model's vertices):
   reference_points N cells N occupied N near N precision X visible N covered N recall X

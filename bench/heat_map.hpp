@@ -2,8 +2,8 @@
 // Heat maps of the sensitivity grid (sim/sensitivity_grid.hpp): per model one PNG with two rows
 // of panels, irrelevant nodes (% of the OctoMap model's) and F1 (the authors' counting), each a
 // panel per re-observation probability: patch size across, lifetime down, the value printed in
-// every cell; the mixed regime's values under them. Written with io/png.hpp, labelled with the
-// knnocc tool's bitmap font (examples/cli/bitmap_font.hpp).
+// every cell; the mixed regime's values under them. Written with io/png.hpp (deflated by the
+// tool's zlib when built with it), labelled with the tool's bitmap font.
 
 #include <algorithm>
 #include <array>
@@ -17,6 +17,7 @@
 #include <knnocc/sim/sensitivity_grid.hpp>
 
 #include "bitmap_font.hpp"
+#include "zlib_png.hpp"
 
 namespace knnocc::bench {
 
@@ -118,7 +119,7 @@ inline void write_heat_map(const std::string& path, const std::string& title,
                     v.irrelevant_pct[c], v.f1[c]);
       cli::draw_text(img, 8, height - 16, buf, black, 1);
     }
-  io::write_png(path, img.width, img.height, img.rgb);
+  io::write_png(path, img.width, img.height, img.rgb, cli::zlib_deflate());
 }
 
 }  // namespace knnocc::bench

@@ -18,6 +18,8 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "common_options.hpp"
+#include "eval_heldout.hpp"
+#include "eval_points.hpp"
 #include "map_files.hpp"
 #include "resource_limits.hpp"
 
@@ -40,6 +42,23 @@ Table 1 metrics on one line:
   evaluated    occupied voxels above the ground band; precision = 1 - irrelevant / evaluated
   shell_recall in_shell / shell
   free_inside  free voxels entirely inside a shape (space wrongly carved)
+and the authors' counting (Miao et al., Sensors 2022) on a second line:
+  tp N fp N tn N fn N f1 X mcc X
+  over the voxels known in the map: TP occupied and matched one-to-one (a maximum matching) to
+  a reference-occupied voxel within one voxel along each axis, FP the other occupied ones, FN
+  free but reference-occupied and matched by no TP, TN free in both; the reference shapes are
+  voxelised: a voxel is occupied when it meets a shape (surface or inside), free otherwise, and
+  unknown (not counted) in the ground band (centres less than 0.3 m above the ground, or below).
+
+Against reference points (--reference .ply/.pcd/.xyz, e.g. a room model's vertices):
+  reference_points N cells N occupied N near N precision X visible N covered N recall X
+  near     occupied voxels within one voxel of a reference point    (precision = near/occupied)
+  visible  reference voxels within one voxel of a point of --seen-by SEQ (a sequence folder,
+           --crop M as in `knnocc map`); every reference voxel without --seen-by
+  covered  visible reference voxels within one voxel of an occupied voxel (recall)
+  then the counting line against the points' voxels (free: the rest of their bounding box grown
+  by a voxel). Vertices alone put a flat face's points at its corners: distances to them are
+  upper bounds, so precision is a lower bound and FP, FN are upper bounds.
 
 Without ground truth (--ids SEQ: a sequence folder whose clouds carry map-point ids, e.g. ORB-SLAM
 keyframes; --crop M keeps the points within M of their camera, as `knnocc map --crop`): prints
@@ -54,6 +73,18 @@ keyframes; --crop M keeps the points within M of their camera, as `knnocc map --
                   (both need --against: without it they print n/a, with a note on stderr)
   free_multiview  multi-view voxels that are free in --map
   far             occupied voxels farther than --far from every multi-view voxel
+
+Held-out (--heldout SEQ: a sequence with map-point ids): the keyframes split into --folds F
+interleaved folds (fold f: keyframes i with i % F == f); each fold is scored against a map of
+the other folds' keyframes, built with --model (all: one line each) at --res (default 0.1) with
+the model's defaults, as `knnocc map` builds it; sums over the folds:
+  heldout MODEL folds F points N recall X rays N seen_through N occupied N seen_through_share X
+  points        map points that >= --min-views (2) held-out keyframes observe
+  recall        of those, the share whose voxel is occupied
+  rays          the held-out rays to those points
+  seen_through  occupied voxels such a ray passes through before its end voxel (data the map was
+                not built from saw them empty), and their share of the occupied voxels
+It needs no ground truth and no rule of any model.
 )";
 
 CommandSpec make_eval_spec() {
@@ -64,9 +95,12 @@ CommandSpec make_eval_spec() {
   s.summary = "compare a map with reference shapes (Table 1), or with a keyframe sequence's ids";
   s.usage =
       "knnocc eval --map FILE --reference FILE [--res R] [--inflate M] [--ground-band M]\n"
+      "       knnocc eval --map FILE --reference POINTS.ply [--seen-by SEQ [--crop M]] [--res R]\n"
       "       knnocc eval --ids SEQ [--map FILE [--against FILE]] [--crop M] [--res R] "
       "[--min-views N]\n"
-      "                   [--far M]";
+      "                   [--far M]\n"
+      "       knnocc eval --heldout SEQ [--model octomap|knn|robust|all] [--folds F] [--res R]\n"
+      "                   [--crop M] [--min-views N] [--margin M]";
   s.text = kEvalText;
   s.groups.push_back(
       {"options",
@@ -74,7 +108,12 @@ CommandSpec make_eval_spec() {
         Option::number("--res", "R", "voxel edge of a voxel-list map; a tree's must equal it")
             .alias("-r")
             .at_least(kMinResolution),
-        Option::text("--reference", "FILE", "reference shapes (`knnocc sim`'s reference.txt)"),
+        Option::text("--reference", "FILE",
+                     "reference shapes (`knnocc sim`'s reference.txt), or reference points "
+                     "(.ply .pcd .xyz)"),
+        Option::text("--seen-by", "SEQ",
+                     "reference points: count recall over the reference voxels near this "
+                     "sequence's points only"),
         Option::number("--inflate", "M",
                        "occupied voxels farther than M from the shapes are "
                        "irrelevant")
@@ -94,13 +133,32 @@ CommandSpec make_eval_spec() {
         Option::number("--crop", "M", "keep the points within M of their camera")
             .fallback_text("no crop")
             .above(0),
-        Option::integer("--min-views", "N", "keyframes that make a map point multi-view")
-            .fallback(std::to_string(v.min_views))
+        Option::integer("--min-views", "N",
+                        "keyframes that make a map point multi-view (--ids), or held-out "
+                        "keyframes that must observe a point (--heldout)")
+            .fallback_text(std::to_string(v.min_views) + " (--ids), " +
+                           std::to_string(eval::HeldoutOptions{}.min_views) + " (--heldout)")
             .at_least(1)
             .at_most(1000),
         Option::number("--far", "M", "occupied voxels farther than M from every multi-view voxel")
             .fallback(format_number(v.far))
             .at_least(0)},
+       ""});
+  s.groups.push_back(
+      {"held-out keyframes (--heldout)",
+       {Option::text("--heldout", "SEQ", "a sequence folder whose clouds carry map-point ids"),
+        Option::text("--model", "NAME", "the model whose maps are scored, or all")
+            .alias("-m")
+            .fallback("all")
+            .one_of({"octomap", "knn", "robust", "all"}),
+        Option::integer("--folds", "F", "interleaved folds")
+            .fallback(std::to_string(eval::HeldoutOptions{}.folds))
+            .at_least(2)
+            .at_most(1000),
+        Option::number("--margin", "M", "each held-out ray stops M short of its point")
+            .fallback(format_number(eval::HeldoutOptions{}.end_margin))
+            .at_least(0)
+            .below(1000)},
        ""});
   return s;
 }
@@ -126,7 +184,7 @@ int run_eval_ids(const Args& args) {
   const std::string seq_path = args.str("--ids");
   const double crop = args.number("--crop", -1.0);
   eval::MultiviewOptions opt;
-  opt.min_views = static_cast<std::uint32_t>(args.integer("--min-views"));
+  opt.min_views = static_cast<std::uint32_t>(args.integer("--min-views", opt.min_views));
   opt.far = args.number("--far");
   const io::Sequence seq = io::Sequence::open(seq_path);
   eval::MapPointViews mpv;
@@ -169,12 +227,15 @@ int run_eval_ids(const Args& args) {
 
 int run_eval(const Args& args) {
   use_memory_limit(args);
+  if (args.has("--heldout")) return run_eval_heldout(args);
   if (args.has("--ids")) return run_eval_ids(args);
   const std::string map_path = args.required("--map");
   const std::string ref_path = args.required("--reference");
   eval::MetricOptions opt;
   opt.inflate = args.number("--inflate");
   opt.ground_band = args.number("--ground-band");
+  if (is_point_reference(ref_path))
+    return run_eval_points(args, read_map(args, map_path), ref_path);
   const eval::Reference ref = eval::read_reference(ref_path);
   const OccupancyMap<OcKey> map = read_map(args, map_path);
   const eval::Metrics m = eval::evaluate(map, ref, opt);
@@ -183,6 +244,7 @@ int run_eval(const Args& args) {
       "precision %.4f shell_recall %.4f free_inside %zu\n",
       m.occupied, m.free, m.shell, m.in_shell, m.covered, m.irrelevant, m.evaluated, m.precision(),
       m.shell_recall(), m.free_inside);
+  print_confusion(eval::count_confusion(map, eval::ShapeVoxels<OcKey>(ref, map.grid())));
   return 0;
 }
 

@@ -22,6 +22,10 @@
 //                     or fuse it), each with probability repeat_prob
 //   outlier_depth_gain the outlier rate grows as (z / radius)^gain with depth z and the depth
 //                     error |factor - 1| as well (far matches are worse)
+//   random_patches    outlier_cluster and outlier_repeat become maxima: every patch draws its
+//                     size uniformly from 1..outlier_cluster and its lifetime from
+//                     0..outlier_repeat (patches then come (1 + outlier_cluster) / 2 times less
+//                     often than single wrong matches)
 // With all of them at their defaults the random sequence, and so every keyframe, is the same as
 // without them. seen_once_fraction() of the keyframes says how many distinct map points one
 // keyframe alone observes (6.6 % on ../shared/data/orbslam2_stereo_keyframes, `knnocc eval --ids`).
@@ -72,6 +76,7 @@ struct TreeSceneParams {
   std::size_t outlier_repeat = 0;   ///< following keyframes that may re-observe a patch
   double repeat_prob = 1.0;         ///< probability of each re-observation
   double outlier_depth_gain = 0.0;  ///< rate and depth error grow as (z / radius)^gain
+  bool random_patches = false;      ///< sizes and lifetimes drawn per patch up to the two above
 
   void validate() const {
     if (keyframes < 1 || keyframes > 100000)
@@ -110,6 +115,7 @@ struct SimKeyframe {
   io::Pose pose;             ///< camera to world (stamp = keyframe index)
   io::Cloud cloud;           ///< camera frame, one map-point id per point
   std::size_t outliers = 0;  ///< wrong matches among the points
+  std::size_t patches = 0;   ///< wrong patches this keyframe created (not re-observed ones)
 };
 
 class TreeScene {
@@ -156,6 +162,7 @@ class TreeScene {
     return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
   }
   static std::size_t rounded(double mean) { return static_cast<std::size_t>(std::llround(mean)); }
+  static std::size_t rounded_down(double v) { return static_cast<std::size_t>(std::floor(v)); }
 
   void make_sites() {
     const eval::Ellipsoid& e = ref_.ellipsoids[0];
@@ -285,7 +292,9 @@ class TreeScene {
       const double depth_scale =
           p_.outlier_depth_gain > 0 ? std::pow(pc.z() / p_.radius, p_.outlier_depth_gain) : 1.0;
       // a wrong stereo match (a patch of outlier_cluster points) instead of this site
-      if (uniform() < p_.outliers * depth_scale / static_cast<double>(p_.outlier_cluster)) {
+      const double mean_size = p_.random_patches ? (1.0 + double(p_.outlier_cluster)) / 2
+                                                 : static_cast<double>(p_.outlier_cluster);
+      if (uniform() < p_.outliers * depth_scale / mean_size) {
         const double e = 1.1 * uniform();  // factor 0.5 + e, its error scaled by depth_scale
         const double factor =
             depth_scale == 1.0 ? 0.5 + e : std::max(0.2, 1.0 + (e - 0.5) * depth_scale);
@@ -304,7 +313,13 @@ class TreeScene {
   void add_wrong_patch(SimKeyframe& kf, const Eigen::Vector3d& pc, double factor,
                        const Eigen::Matrix3d& R, const Eigen::Vector3d& o) {
     Patch patch;
-    for (std::size_t m = 0; m < p_.outlier_cluster; ++m) {
+    std::size_t size = p_.outlier_cluster, lifetime = p_.outlier_repeat;
+    if (p_.random_patches) {
+      size = 1 + std::min(p_.outlier_cluster - 1, rounded_down(uniform() * double(size)));
+      lifetime = std::min(lifetime, rounded_down(uniform() * double(lifetime + 1)));
+    }
+    ++kf.patches;
+    for (std::size_t m = 0; m < size; ++m) {
       Eigen::Vector3d q = pc;
       if (m > 0) q += Eigen::Vector3d(normal(), normal(), 0.0) * (p_.cluster_radius / 2);
       const Eigen::Vector3d wrong = q * factor;
@@ -317,8 +332,8 @@ class TreeScene {
         patch.ids.push_back(id);
       }
     }
-    if (p_.outlier_repeat > 0) {
-      patch.left = p_.outlier_repeat;
+    if (lifetime > 0) {
+      patch.left = lifetime;
       patches_.push_back(std::move(patch));
     }
   }

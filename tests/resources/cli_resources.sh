@@ -196,7 +196,7 @@ case "$CASE" in
     msg="big.bt: the tree's 1073741824 voxels need at least .* more than the map's share .* of --memory-limit 100 MB"
     expect 2 "$msg" "$K" convert big.bt out.ot --memory-limit 100M
     expect 2 "$msg" "$K" view big.bt -o page.html --memory-limit 100M
-    printf 'ground 0\n' > ref.txt
+    printf 'ground 0\nellipsoid 0 0 1 1 1 1\n' > ref.txt
     expect 2 "$msg" "$K" eval --map big.bt --reference ref.txt --memory-limit 100M
     expect 2 "$msg" "$K" map --input p.xyz --init-map big.bt --memory-limit 100M --out-ot x.ot
     [ ! -e out.ot ] && [ ! -e page.html ] && [ ! -e x.ot ] || fail "an output was written"

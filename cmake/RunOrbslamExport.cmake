@@ -6,7 +6,8 @@
 # Checks: the run's keyframes and correction snapshots; the clouds carry ids and the per-point
 # evidence (found, visible, observations); for the OctoMap and k-NN models the map built with
 # --corrections equals, voxel for voxel, the map of the final trajectory built from scratch; the
-# robust model reads the clouds (their ids) too.
+# robust model reads the clouds (their ids) too; and README's "From ORB-SLAM to Nav2" commands,
+# word for word but for the folder, give the .bt, the picture, the page and the Nav2 map.
 function(run_checked)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE _rc OUTPUT_VARIABLE _out ERROR_VARIABLE _err)
   message(STATUS "${ARGN}\nexit ${_rc}\n${_out}${_err}")
@@ -56,4 +57,30 @@ endforeach()
 run_checked("${TOOL}" map --input "${_run}" --res 0.1 --model robust)
 if(NOT _out MATCHES "knn k [0-9]+ map_points [1-9][0-9]+ ")
   message(FATAL_ERROR "the robust model did not read the map-point ids")
+endif()
+
+# README, "From ORB-SLAM to Nav2" (run1 is the simulated run's folder).
+set(_readme "${DIR}/readme")
+file(MAKE_DIRECTORY "${_readme}")
+file(COPY "${_run}/" DESTINATION "${_readme}/run1")
+execute_process(COMMAND "${CMAKE_COMMAND}" -E chdir "${_readme}" "${TOOL}" map -i run1
+                        --corrections run1/corrections --model knn --res 0.05 -o run1.bt -o run1.png
+                RESULT_VARIABLE _rc)
+execute_process(COMMAND "${CMAKE_COMMAND}" -E chdir "${_readme}" "${TOOL}" view run1.bt --path run1
+                RESULT_VARIABLE _rc2)
+execute_process(COMMAND "${CMAKE_COMMAND}" -E chdir "${_readme}" "${TOOL}" convert run1.bt run1.yaml
+                        --grid-z -1.0:1.0 --up -y
+                RESULT_VARIABLE _rc3 OUTPUT_VARIABLE _grid)
+message(STATUS "README commands: exit ${_rc} ${_rc2} ${_rc3}\n${_grid}")
+if(NOT (_rc EQUAL 0 AND _rc2 EQUAL 0 AND _rc3 EQUAL 0))
+  message(FATAL_ERROR "a README command failed")
+endif()
+foreach(_f run1.bt run1.png run1.html run1.yaml run1.pgm)
+  if(NOT EXISTS "${_readme}/${_f}")
+    message(FATAL_ERROR "README's commands did not write ${_f}")
+  endif()
+endforeach()
+# The room's walls in the grid: occupied and free cells, the unknown ones only outside.
+if(NOT _grid MATCHES "grid run1.yaml: [0-9]+ x [0-9]+ cells of 0.05 m, up -y, heights -1:1 m: occupied [1-9][0-9][0-9]+ free [1-9][0-9][0-9][0-9]+ unknown")
+  message(FATAL_ERROR "the Nav2 map does not show the room")
 endif()

@@ -191,8 +191,7 @@ void write_converted_map(const OccupancyMap<OcKey>& map, const ConvertJob& j, co
     std::printf("%s\nwrote %s, %s\n", write_grid_file(map, out, ctx).c_str(), out.c_str(),
                 io::ros_map_image_path(out).c_str());
   } else if (j.out_ext == ".png") {
-    write_map_png(out, map, args.has("--up") ? parse_up_axis(args.str("--up")) : UpAxis{},
-                  std::filesystem::path(j.in).filename().string());
+    write_map_png(out, map, up_axis(args), std::filesystem::path(j.in).filename().string());
     std::printf("wrote %s: a picture of the map\n", out.c_str());
   } else if (j.out_ext == ".voxels" || j.out_ext == ".txt") {
     io::write_voxel_list(out, io::voxel_records(map, all));

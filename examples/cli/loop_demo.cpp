@@ -27,8 +27,10 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "common_options.hpp"
 #include "live_corrections.hpp"
 #include "map_picture.hpp"
+#include "map_run.hpp"
 
 namespace knnocc::cli {
 
@@ -52,7 +54,7 @@ and the time each correction took.
 )";
   s.groups.push_back(
       {"options",
-       {Option::text("--scene", "NAME", "loop for this demo").one_of({"tree", "room", "loop"}),
+       {scene_option("loop for this demo"),
         Option::integer("--seed", "S", "random seed of the scene and the drift")
             .fallback("1")
             .at_least(0),
@@ -60,13 +62,7 @@ and the time each correction took.
             .fallback("0.1")
             .at_least(0)
             .at_most(10),
-        Option::number("--res", "R", "voxel edge in metres")
-            .fallback("0.1")
-            .at_least(0.02)
-            .at_most(1),
-        Option::number("--crop", "M", "keep the points within M of their camera")
-            .fallback("4")
-            .above(0),
+        demo_res_option(), demo_crop_option(),
         Option::text("--out", "DIR", "also write <model>_<map>.png and .bt per map into DIR")},
        ""});
   return s;
@@ -105,17 +101,10 @@ bool run_model(const char* name, const Model& model, const std::vector<sim::SimK
   LiveMapper<Model, OcKey, EigenPose> live(res, model);
   std::vector<Correction> corrections;
   for (std::size_t i = 0; i < kfs.size(); ++i) {
-    std::vector<Point3f> pts;
-    std::vector<std::uint64_t> ids;
-    const io::Cloud& c = kfs[i].cloud;
-    for (std::size_t j = 0; j < c.points.size(); ++j) {
-      const Point3f& p = c.points[j];
-      if (!(std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= crop)) continue;
-      pts.push_back(p);
-      ids.push_back(c.ids[j]);
-    }
-    if constexpr (!LiveMapper<Model>::uses_map_cloud) ids.clear();
-    live.add(i, EigenPose::from(run.tracked[i]), std::move(pts), std::move(ids));
+    io::Cloud cloud = kfs[i].cloud;
+    crop_cloud(cloud, crop);
+    if constexpr (!LiveMapper<Model>::uses_map_cloud) cloud.ids.clear();
+    live.add(i, EigenPose::from(run.tracked[i]), std::move(cloud.points), std::move(cloud.ids));
     const auto snap = run.snapshots.find(i);
     if (snap == run.snapshots.end()) continue;
     std::vector<std::pair<std::uint64_t, EigenPose>> poses;

@@ -46,10 +46,10 @@ input (-i, --input PATH):
   a point file          .ply, .pcd (VIEWPOINT = sensor pose), KITTI .bin, or ASCII
                         .xyz/.dat/.txt (x y z per line); sensor at the origin
 Points are in the sensor frame, or in the world frame with --points-frame world. A cloud of which
-fewer than 10 % of the points land in the map's key range is an error naming the likely cause
-(a time stamp column, millimetres). Clouds with colour (PLY red green blue, PCD rgb/rgba) give
-each occupied voxel the mean colour of the points that hit it, in .ply, .html and .ot files (a
-ColorOcTree; --no-color: a plain OcTree).
+fewer than 10 % of the points lie in the map's key range in their own coordinates is an error
+naming the likely cause (a time stamp column, millimetres). Clouds with colour (PLY red green
+blue, PCD rgb/rgba) give each occupied voxel the mean colour of the points that hit it, in .ply,
+.html and .ot files (a ColorOcTree; --no-color: a plain OcTree).
 Which model for which sensor: sparse visual-SLAM keyframes with map-point ids -> robust; dense
 depth cameras / LiDAR -> octomap (knn removes far, sparser surfaces of dense clouds; robust
 without ids is octomap's model).

@@ -113,7 +113,6 @@ inline void check_map_file_flags(const Args& args, const std::vector<MapFile>& f
   const auto any = [&](MapFormat f) {
     return std::any_of(files.begin(), files.end(), [f](const MapFile& m) { return m.format == f; });
   };
-  if (args.has("--up")) parse_up_axis(args.str("--up"));
   if ((args.flag("--ply-cubes") || args.flag("--ply-free")) && !any(MapFormat::ply))
     throw UsageError("--ply-cubes and --ply-free need a .ply output (--out-ply or -o FILE.ply)");
   if (any(MapFormat::grid) && !args.has("--grid-z"))

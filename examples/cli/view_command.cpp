@@ -136,7 +136,7 @@ int run_view(const Args& args) {
   ViewOptions opt;
   std::optional<UpAxis> path_up;
   if (args.has("--path")) opt.path = view_path(args.str("--path"), path_up);
-  const UpAxis up = args.has("--up") ? parse_up_axis(args.str("--up")) : path_up.value_or(UpAxis{});
+  const UpAxis up = up_axis(args, path_up.value_or(UpAxis{}));
   opt.max_faces = static_cast<std::size_t>(args.integer("--max-faces"));
   const std::vector<std::string> names = view_names(args);
   if (!view_pages_available())

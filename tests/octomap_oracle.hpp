@@ -10,9 +10,10 @@
 
 namespace knnocc::test {
 
-/// Calls f(key, leaf) for every finest-level voxel under every leaf of `tree`.
-template <class F>
-void for_each_octomap_voxel(const octomap::OcTree& tree, F&& f) {
+/// Calls f(key, leaf) for every finest-level voxel under every leaf of `tree` (an OcTree or
+/// another liboctomap tree, e.g. a ColorOcTree).
+template <class Tree, class F>
+void for_each_octomap_voxel(const Tree& tree, F&& f) {
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
     const int span = 1 << (16 - static_cast<int>(it.getDepth()));
     const octomap::OcTreeKey base = it.getIndexKey();

@@ -99,6 +99,21 @@ TEST_CASE("args: every declared check refuses with one line naming the option") 
   CHECK(err({"a", "b", "c"}) == "at most 2 files; 'c' is one too many");
 }
 
+TEST_CASE("args: a repeatable option keeps every value, in order, each checked") {
+  cli::CommandSpec spec = test_spec();
+  spec.groups[0].options.push_back(
+      cli::Option::text("--output", "FILE", "outputs").alias("-o").repeatable());
+  spec.groups[0].options.push_back(
+      cli::Option::number("--level", "L", "levels").repeatable().at_least(0));
+  const cli::Args a(spec, {"-i", "x", "-o", "a.bt", "--output=b.png", "-o", "c.yaml"});
+  CHECK(a.all("--output") == std::vector<std::string>{"a.bt", "b.png", "c.yaml"});
+  CHECK(a.str("--output") == "a.bt");  // the first
+  CHECK(a.all("--level").empty());
+  CHECK(usage_error(spec, {"-i", "x", "--level", "1", "--level", "-1"}) ==
+        "--level must be >= 0, got -1");
+  CHECK(usage_error(spec, {"-i", "x", "--res", "0.1", "--res", "0.2"}) == "--res given twice");
+}
+
 TEST_CASE("commands: every declared default passes its own check, and help fits 100 columns") {
   std::set<std::string> names;
   for (const cli::Command& c : cli::commands()) {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -171,5 +172,32 @@ TEST_CASE("voxel_export.points and cubes read back") {
     } else {
       CHECK(mesh.find("\n4 8 10 11 9\n") != std::string::npos);  // the second cube's -z face
     }
+  }
+}
+
+TEST_CASE("voxel_export.occupied voxels take their colour, the others height or grey") {
+  OccupancyMap<OcKey> map(0.2);
+  map.set(OcKey(32768, 32768, 32768), 1.0f);
+  map.set(OcKey(32770, 32767, 32780), 0.5f);
+  map.set(OcKey(32771, 32767, 32780), -1.0f);  // free: grey even with a colour
+  const knnocc::VoxelColorOf<OcKey> color_of = [](const OcKey& k) -> std::optional<knnocc::Rgb> {
+    if (k[0] == 32770) return std::nullopt;
+    return knnocc::Rgb{12, 34, 56};
+  };
+  const std::string path = export_file("coloured.ply");
+  io::VoxelExportOptions o;
+  o.which = io::VoxelSelection::all;
+  for (const bool binary : {true, false}) {
+    o.binary = binary;
+    REQUIRE(io::write_voxels_ply(path, map, o, color_of) == 3);
+    const io::Cloud c = io::read_ply(path);  // sorted by key: the three voxels in x order
+    REQUIRE(c.colors.size() == 3);
+    CHECK(c.colors[0] == knnocc::Rgb{12, 34, 56});
+    CHECK(c.colors[2] == knnocc::Rgb{200, 200, 200});
+    REQUIRE(io::write_voxels_ply(path, map, o) == 3);  // without colours: by height
+    const auto top = io::detail::height_colour(1.0);
+    CHECK(io::read_ply(path).colors[1] == knnocc::Rgb{top[0], top[1], top[2]});
+    REQUIRE(io::write_voxels_ply(path, map, o, color_of) == 3);
+    CHECK(io::read_ply(path).colors[1] == knnocc::Rgb{top[0], top[1], top[2]});  // no colour
   }
 }

@@ -10,6 +10,7 @@
 #include <knnocc/insertion/scan_inserter.hpp>
 #include <knnocc/io/sequence.hpp>
 #include <knnocc/io/xyz.hpp>
+#include <knnocc/mapper.hpp>
 #include <knnocc/raycast/cast_ray.hpp>
 
 #include "test_support.hpp"
@@ -162,6 +163,48 @@ TEST_CASE("octomap_reference.random_scenes_max_range_discretize") {
     octomap::OcTree tree(res);
     octomap_insert(tree, scans, max_range, discretize);
     expect_same_map(map, tree);
+  }
+}
+
+TEST_CASE("octomap_reference.hit_miss_and_clamping_parameters") {
+  // knnocc map --prob-hit --prob-miss --clamp: the Mapper with OctoMapModel::from_probabilities
+  // and OccupancyParams, against liboctomap's setProbHit/Miss and setClampingThresMin/Max. Scans
+  // from nearby origins of points on a 0.5 m lattice reach both clamping bounds.
+  knnocc::test::Rng rng(35);
+  std::uniform_int_distribution<int> u(-8, 8);
+  std::uniform_real_distribution<float> small(-0.2f, 0.2f);
+  std::vector<Scan> scans(12);
+  for (auto& s : scans) {
+    s.origin = Point3f{small(rng), small(rng), small(rng)};
+    for (int i = 0; i < 1500; ++i)
+      s.points.push_back(
+          {0.5f * u(rng) + 0.01f, 0.5f * u(rng) + 0.01f, 0.5f * (u(rng) % 2) + 0.01f});
+  }
+  struct Case {
+    double hit, miss, clamp_min, clamp_max;
+  };
+  for (const Case c : {Case{0.8, 0.3, 0.2, 0.9}, Case{0.6, 0.45, 0.3, 0.8}}) {
+    CAPTURE(c.hit);
+    knnocc::MapperOptions options;
+    options.occupancy.clamp_min = knnocc::logodds(c.clamp_min);
+    options.occupancy.clamp_max = knnocc::logodds(c.clamp_max);
+    knnocc::Mapper<knnocc::OctoMapModel> mapper(
+        0.1, knnocc::OctoMapModel::from_probabilities(c.hit, c.miss), options);
+    octomap::OcTree tree(0.1);
+    tree.setProbHit(c.hit);
+    tree.setProbMiss(c.miss);
+    tree.setClampingThresMin(c.clamp_min);
+    tree.setClampingThresMax(c.clamp_max);
+    for (const auto& s : scans) mapper.insert_keyframe(s.origin, s.points, {});
+    octomap_insert(tree, scans);
+    expect_same_map(mapper.map(), tree);
+    std::size_t at_min = 0, at_max = 0;
+    mapper.map().for_each_voxel([&](const OcKey&, float v) {
+      at_min += v == options.occupancy.clamp_min;
+      at_max += v == options.occupancy.clamp_max;
+    });
+    CHECK(at_min > 100);
+    CHECK(at_max > 10);
   }
 }
 

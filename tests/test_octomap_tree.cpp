@@ -8,9 +8,11 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <knnocc/insertion/scan_inserter.hpp>
@@ -387,6 +389,65 @@ TEST_CASE("octomap_tree.liboctomap agrees on mixed maps, pruning included") {
     });
     CHECK(io::encode_ot(map) == octomap_bytes(tree, false));
     CHECK(io::encode_bt(map) == octomap_bytes(tree, true));
+  }
+}
+
+namespace {
+
+// A colour per voxel of mixed_map: one per aligned 2x2x2 block (so the 8 leaves of some nodes
+// are equal in value and colour and those of larger nodes are not), none for some voxels.
+std::optional<knnocc::Rgb> test_color(const OcKey& k) {
+  if ((k[0] + 3 * k[1]) % 11 == 0) return std::nullopt;
+  return knnocc::Rgb{static_cast<std::uint8_t>(k[0] >> 1), static_cast<std::uint8_t>(k[1] >> 1),
+                     static_cast<std::uint8_t>((k[2] >> 1) * 37)};
+}
+
+}  // namespace
+
+TEST_CASE("octomap_tree.ColorOcTree .ot: liboctomap reads every voxel's value and colour") {
+  for (std::uint64_t seed : {1u, 2u}) {
+    CAPTURE(seed);
+    const OccupancyMap<OcKey> map = mixed_map(seed);
+    const std::string path = tree_file("colors.ot");
+    io::write_color_ot(path, map, test_color);
+    std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(path));
+    auto* t = dynamic_cast<octomap::ColorOcTree*>(read.get());
+    REQUIRE(t != nullptr);
+    std::size_t finest = 0, wrong_value = 0, wrong_color = 0, colored = 0;
+    knnocc::test::for_each_octomap_voxel(*t, [&](const OcKey& k,
+                                                 const octomap::ColorOcTreeNode& leaf) {
+      ++finest;
+      const auto v = map.logodds(k);
+      wrong_value += !v || *v != leaf.getLogOdds();
+      const auto expect = v && map.is_occupied(*v) ? test_color(k) : std::nullopt;
+      const auto c = leaf.getColor();
+      colored += leaf.isColorSet();
+      wrong_color += c != (expect ? octomap::ColorOcTreeNode::Color(expect->r, expect->g, expect->b)
+                                  : octomap::ColorOcTreeNode::Color());
+    });
+    CHECK(finest == map.num_voxels());
+    CHECK(wrong_value == 0);
+    CHECK(wrong_color == 0);
+    CHECK(colored > 1000);
+    // Inner nodes hold ColorOcTree's own rule: updateInnerOccupancy() (max of the children's
+    // values, mean of their colours) changes nothing.
+    std::vector<std::pair<float, octomap::ColorOcTreeNode::Color>> inner;
+    for (auto it = t->begin_tree(), end = t->end_tree(); it != end; ++it)
+      if (!it.isLeaf()) inner.emplace_back(it->getLogOdds(), it->getColor());
+    t->updateInnerOccupancy();
+    std::size_t i = 0, changed = 0;
+    for (auto it = t->begin_tree(), end = t->end_tree(); it != end; ++it)
+      if (!it.isLeaf()) changed += inner[i++] != std::make_pair(it->getLogOdds(), it->getColor());
+    CHECK(i == inner.size());
+    CHECK(changed == 0);
+    // Without colours the file is what liboctomap writes for a ColorOcTree of the same values.
+    octomap::ColorOcTree plain(0.05);
+    map.for_each_voxel([&](const OcKey& k, float v) {
+      plain.setNodeValue(octomap::OcTreeKey(k[0], k[1], k[2]), v);
+    });
+    std::ostringstream bytes;
+    plain.write(bytes);
+    CHECK(io::encode_color_ot(map, [](const OcKey&) { return std::nullopt; }) == bytes.str());
   }
 }
 

@@ -112,6 +112,67 @@ TEST_CASE("io.ply binary round trip") {
   }
 }
 
+TEST_CASE("io.ply colours: uchar red green blue read and written, other colour types skipped") {
+  ScratchDir dir("ply_colours");
+  io::Cloud cloud;
+  cloud.points = sample_points();
+  for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+    cloud.colors.push_back({static_cast<std::uint8_t>(i), static_cast<std::uint8_t>(255 - i % 256),
+                            static_cast<std::uint8_t>(i * 7)});
+    cloud.ids.push_back(i * 3);
+  }
+  for (const bool binary : {true, false}) {
+    CAPTURE(binary);
+    const std::string p = dir.file(binary ? "rgb.ply" : "rgb_ascii.ply");
+    io::write_ply_cloud(p, cloud, binary);
+    CHECK(contains(read_text(p),
+                   "property uint id\nproperty uchar red\nproperty uchar green\n"
+                   "property uchar blue\n"));
+    const io::Cloud c = io::read_ply(p);
+    REQUIRE(c.points.size() == cloud.points.size());
+    CHECK(c.ids == cloud.ids);
+    CHECK(c.colors == cloud.colors);
+    for (std::size_t i = 0; i < c.points.size(); ++i)
+      CHECK(same_bits(c.points[i].y, cloud.points[i].y));
+  }
+  // Colours between other properties, in an ascii file with an extra float.
+  const std::string mixed = dir.file("mixed.ply");
+  write_bytes(mixed,
+              "ply\nformat ascii 1.0\nelement vertex 2\nproperty uchar blue\nproperty float x\n"
+              "property uchar green\nproperty float y\nproperty float z\nproperty float nx\n"
+              "property uchar red\nend_header\n3 1 2 1 1 0.5 1\n255 2 0 2 2 0.5 128\n");
+  const io::Cloud m = io::read_ply(mixed);
+  CHECK(m.colors == std::vector<knnocc::Rgb>{{1, 2, 3}, {128, 0, 255}});
+  // Float colours, or only two channels: no colours (the points are still read).
+  const std::string floats = dir.file("float_rgb.ply");
+  write_bytes(floats,
+              "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+              "property float z\nproperty float red\nproperty float green\nproperty float blue\n"
+              "end_header\n1 2 3 0.5 0.5 0.5\n");
+  CHECK(io::read_ply(floats).colors.empty());
+  CHECK(io::read_ply(floats).points.size() == 1);
+  const std::string two = dir.file("two_channels.ply");
+  write_bytes(
+      two,
+      "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+      "property float z\nproperty uchar red\nproperty uchar green\nend_header\n1 2 3 4 5\n");
+  CHECK(io::read_ply(two).colors.empty());
+  // An ascii colour out of 0..255 is an error naming the file.
+  const std::string bad = dir.file("bad_rgb.ply");
+  write_bytes(bad,
+              "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+              "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+              "end_header\n1 2 3 4 256 6\n");
+  const std::string msg = error_of([&] { io::read_ply(bad); });
+  CHECK(contains(msg, bad));
+  CHECK(contains(msg, "as a colour"));
+  // The writer checks the count.
+  io::Cloud short_colors = cloud;
+  short_colors.colors.pop_back();
+  CHECK(contains(error_of([&] { io::write_ply_cloud(dir.file("short.ply"), short_colors); }),
+                 "colours for"));
+}
+
 TEST_CASE("io.ply ascii with extra properties, comments, CRLF header and a face element") {
   ScratchDir dir("ply_ascii");
   const std::string p = dir.file("ascii.ply");

@@ -86,6 +86,10 @@ TEST_CASE("io.poses parsing, quaternion order and transforms") {
   CHECK(world[1].z == doctest::Approx(8.0));
   io::transform_to_world(poses[1], pts, pts);  // in place is allowed
   CHECK(pts[1].z == doctest::Approx(8.0));
+  io::transform_to_sensor(poses[1], world);  // and back
+  CHECK(world[0].x == doctest::Approx(1.0));
+  CHECK(world[0].y == doctest::Approx(0.0).epsilon(1e-6));
+  CHECK(world[1].z == doctest::Approx(5.0));
 
   const auto check_bad = [&](const std::string& name, const std::string& text,
                              const std::string& expect) {

@@ -15,6 +15,8 @@
 #include "test_support.hpp"
 
 #ifdef KNNOCC_TEST_TOOL_HEADERS
+#include <knnocc/insertion/voxel_colors.hpp>
+
 #include "headless_chromium.hpp"
 #include "view_page.hpp"
 
@@ -221,6 +223,58 @@ TEST_CASE("view_page.headless chromium shows hostile names as text and runs no s
   CHECK(test::drawn_ms(run.dom) > 0);
   CHECK(run.dom.find("data-pwned") == std::string::npos);
   CHECK(run.dom.find("<img src=\"x\"") != std::string::npos);  // there, and inert
+}
+
+TEST_CASE("view_page.three.js's licence notice, voxel colours and the camera path") {
+  if (!cli::view_pages_available()) {
+    test::skip("the tool was built without three.js (libjs-three)");
+    return;
+  }
+  const cli::UpAxis up = cli::parse_up_axis("z");
+  const OccupancyMap<OcKey> map = floor_and_pillar(up);
+  VoxelColors<OcKey> colors(0.1);  // the pillar green, the floor without colour
+  map.for_each_voxel([&](const OcKey& k, float) {
+    if (k[2] > OcKey::center) colors.add(k, Rgb{20, 200, 40});
+  });
+  cli::ViewOptions opt;
+  for (int i = 0; i <= 20; ++i) opt.path.push_back({-1.5 + 0.15 * i, -1.0, 1.2});
+  const std::string html = cli::view_page_html({{"coloured", &map, &colors}}, up, opt);
+  // MIT: the copyright and permission notice before three.js's code, once.
+  const std::size_t notice = html.find("Permission is hereby granted, free of charge");
+  CHECK(notice != std::string::npos);
+  CHECK(html.find("three.js authors") < notice);
+  CHECK(notice < html.find("THREE"));
+  CHECK(html.find("Permission is hereby granted", notice + 1) == std::string::npos);
+  CHECK(html.find("\"colorData\":\"") != std::string::npos);
+  CHECK(html.find("\"path\":[-1.5000,1.2000,1.0000,") != std::string::npos);  // page: x, up, -fw
+
+  const std::string chromium = test::find_chromium();
+  if (chromium.empty()) {
+    test::skip("no Chromium (chromium, chromium-browser, google-chrome or KNNOCC_CHROMIUM)");
+    return;
+  }
+  const std::filesystem::path dir = std::filesystem::path(KNNOCC_BINARY_DIR) / "view_page_test";
+  std::filesystem::create_directories(dir);
+  const std::string page = (dir / "page_colours.html").string(),
+                    shot = (dir / "page_colours.png").string();
+  cli::write_view_page(page, {{"coloured", &map, &colors}}, up, opt);
+  std::filesystem::remove(shot);
+  const test::BrowserRun run = test::run_chromium(chromium, page, shot);
+  REQUIRE(run.status == 0);
+  const test::RgbImage img = test::decode_png_file(shot);
+  std::size_t green = 0, red = 0, magenta = 0;
+  for (std::uint32_t y = 0; y < img.height; ++y)
+    for (std::uint32_t x = 0; x < img.width; ++x) {
+      if ((x < 400 && y < 150) || (x > 1050 && y < 280)) continue;  // panel and legend
+      const std::uint8_t* p = &img.rgb[(std::size_t{y} * img.width + x) * 3];
+      green += p[1] > 110 && p[0] < 60 && p[2] < 80;
+      red += p[0] > 150 && p[1] < 110 && p[2] < 90;
+      magenta += p[0] > 150 && p[1] < 60 && p[2] > 90 && p[2] < 160;
+    }
+  MESSAGE("green ", green, ", red ", red, ", magenta ", magenta, " px; screenshot ", shot);
+  CHECK(green > 300);   // the pillar in its own colour ...
+  CHECK(red < 50);      // ... not in the height ramp's red
+  CHECK(magenta > 30);  // the camera path
 }
 
 #else

@@ -80,6 +80,11 @@ class Option {
     required_ = true;
     return *this;
   }
+  /// May be given more than once (Args::all gives every value).
+  Option& repeatable() {
+    repeatable_ = true;
+    return *this;
+  }
   Option& at_least(double v) { return bound(lo_, lo_open_, v, false); }
   Option& above(double v) { return bound(lo_, lo_open_, v, true); }
   Option& at_most(double v) { return bound(hi_, hi_open_, v, false); }
@@ -103,6 +108,7 @@ class Option {
   ValueType type() const { return type_; }
   bool takes_value() const { return type_ != ValueType::flag; }
   bool is_required() const { return required_; }
+  bool is_repeatable() const { return repeatable_; }
   const std::string& default_value() const { return default_; }
   const std::vector<std::string>& choices() const { return choices_; }
 
@@ -203,7 +209,7 @@ class Option {
   bool (*rule_)(double) = nullptr;
   std::vector<std::string> choices_;
   ValueType type_;
-  bool required_ = false;
+  bool required_ = false, repeatable_ = false;
   double lo_ = -kInf, hi_ = kInf;
   bool lo_open_ = false, hi_open_ = false;
 };
@@ -237,7 +243,8 @@ class Args {
       for (const Option& o : g.options) options_.emplace(o.name(), &o);
     parse(argv);
     if (help_) return;
-    for (const auto& [name, value] : values_) option(name).check(value);
+    for (const auto& [name, values] : values_)
+      for (const std::string& value : values) option(name).check(value);
     for (const auto& [name, o] : options_)
       if (o->is_required() && !values_.count(name))
         throw UsageError(name + " is required (see --help)");
@@ -255,12 +262,19 @@ class Args {
     return values_.count(name) > 0;
   }
 
-  /// The given value, else the declared default, else `fallback`.
+  /// The given value (the first of a repeatable option's), else the declared default, else
+  /// `fallback`.
   std::string str(const std::string& name, const std::string& fallback = {}) const {
     const Option& o = option(name);
     auto it = values_.find(name);
-    if (it != values_.end()) return it->second;
+    if (it != values_.end()) return it->second.front();
     return o.default_value().empty() ? fallback : o.default_value();
+  }
+  /// Every value given for `name`, in command-line order.
+  std::vector<std::string> all(const std::string& name) const {
+    option(name);
+    auto it = values_.find(name);
+    return it == values_.end() ? std::vector<std::string>{} : it->second;
   }
   std::string required(const std::string& name) const {
     if (!has(name)) throw UsageError(name + " is required (see --help)");
@@ -330,16 +344,17 @@ class Args {
         if (has_inline) throw UsageError(o->name() + " takes no value");
         flags_.insert(o->name());
       } else if (o) {
-        if (values_.count(o->name())) throw UsageError(o->name() + " given twice");
+        if (values_.count(o->name()) && !o->is_repeatable())
+          throw UsageError(o->name() + " given twice");
         if (has_inline) {
-          values_[o->name()] = inline_value;
+          values_[o->name()].push_back(inline_value);
           continue;
         }
         if (i + 1 >= argv.size()) throw UsageError(o->name() + " needs a value");
         const std::string& v = argv[i + 1];
         if (v.rfind("--", 0) == 0 && find(v.substr(0, v.find('='))))
           throw UsageError(o->name() + " needs a value, got the option " + v);
-        values_[o->name()] = v;
+        values_[o->name()].push_back(v);
         ++i;
       } else if (a.rfind("--", 0) == 0) {
         throw UsageError("unknown option " + a + " (see --help)");
@@ -356,7 +371,7 @@ class Args {
 
   const CommandSpec* spec_;
   std::map<std::string, const Option*> options_;
-  std::map<std::string, std::string> values_;
+  std::map<std::string, std::vector<std::string>> values_;
   std::set<std::string> flags_;
   std::vector<std::string> positional_;
   bool help_ = false;

@@ -68,7 +68,10 @@ std::string top_level_help() {
     detail::wrap(line, c.spec().summary, line.size(), 11);
     out += line + "\n";
   }
-  return out;
+  return out +
+         "\nmodels (knnocc map --model NAME): octomap (OctoMap's hit/miss model, the default), "
+         "knn (the\npaper's k-NN model, eq 13-15), robust (ours, for visual-SLAM keyframes with "
+         "map-point ids)\n";
 }
 
 std::string cli_markdown() {

@@ -103,23 +103,73 @@ KnnModelParams knn_params(const Args& args) {
 
 OptionGroup map_output_group() {
   return {"map files",
-          {Option::text("--out-bt", "FILE",
+          {Option::text("--output", "FILE",
+                        "a map file in the format its extension names: .bt .ot .ply .png .html "
+                        ".yaml (2D grid) .voxels/.txt (voxel list); repeat for several")
+               .alias("-o")
+               .repeatable(),
+           Option::text("--out-bt", "FILE",
                         "OctoMap binary tree (.bt) for octovis / octomap_server: occupied or free "
                         "per voxel, pruned as OctoMap prunes"),
-           Option::text("--out-ot", "FILE", "OctoMap full tree (.ot): log-odds per node"),
+           Option::text("--out-ot", "FILE",
+                        "OctoMap full tree (.ot): log-odds per node; a ColorOcTree (r g b per "
+                        "node) when the clouds have colour"),
            Option::text("--out-ply", "FILE",
-                        "occupied voxel centres as a PLY point cloud (colour = height, property "
-                        "logodds) for CloudCompare / MeshLab"),
+                        "occupied voxel centres as a PLY point cloud (colour = the points' colour "
+                        "or height, property logodds) for CloudCompare / MeshLab"),
            Option::flag("--ply-cubes",
-                        "--out-ply writes one cube (8 vertices, 6 faces) per voxel instead"),
-           Option::flag("--ply-free", "--out-ply includes free voxels (light grey)"),
+                        "a .ply output holds one cube (8 vertices, 6 faces) per "
+                        "voxel instead"),
+           Option::flag("--ply-free", "a .ply output includes free voxels (light grey)"),
            Option::text("--out-png", "FILE",
                         "a picture: top view (colour = height) above a side view, with legend, "
                         "scale bar and title (zlib-compressed PNG)"),
            Option::text("--out-html", "FILE",
-                        "the map in 3D in one self-contained web page (see knnocc view --help)"),
+                        "the map in 3D in one self-contained web page, with the sensors' path "
+                        "(see knnocc view --help)"),
+           Option::text("--out-grid", "FILE.yaml",
+                        "a 2D occupancy grid for ROS map_server / Nav2: FILE.yaml and FILE.pgm "
+                        "(0 occupied, 254 free, 205 unknown) of the --grid-z band"),
+           grid_z_option(),
+           Option::flag("--no-color",
+                        "ignore the clouds' colours (.ot is then a plain OcTree, .ply and pages "
+                        "coloured by height)"),
            up_option("from the sensor poses: camera -y, LiDAR +z; z for map files")},
           ""};
+}
+
+Option points_frame_option() {
+  return Option::text("--points-frame", "FRAME",
+                      "the clouds' frame: sensor (moved into the world with their pose) or world "
+                      "(already in world coordinates: moved into the sensor frame with the pose "
+                      "first, for --crop, --max-range and the rays)")
+      .fallback("sensor")
+      .one_of({"sensor", "world"});
+}
+
+Option grid_z_option() {
+  return Option::text("--grid-z", "MIN:MAX",
+                      "the height band of a 2D grid, in metres along up: a cell is occupied when "
+                      "a voxel of its column in the band is, free when the column's known voxels "
+                      "there are all free, unknown otherwise");
+}
+
+OptionGroup octomap_model_group() {
+  return {"OctoMap model (--model octomap)",
+          {Option::number("--prob-hit", "P", "occupied probability of a hit (setProbHit)")
+               .fallback("0.7")
+               .above(0.5)
+               .below(1),
+           Option::number("--prob-miss", "P", "occupied probability of a miss (setProbMiss)")
+               .fallback("0.4")
+               .above(0)
+               .below(0.5),
+           Option::text("--clamp", "MIN:MAX",
+                        "clamping bounds as probabilities (setClampingThresMin/Max)")
+               .fallback("0.1192:0.971")},
+          "  OctoMap's .bt/.ot files store none of these (only the tree type, node count and\n"
+          "  resolution): a .ot keeps the clamped log-odds, a .bt only occupied or free, and a\n"
+          "  reader gives its leaves its own clamping bounds.\n"};
 }
 
 }  // namespace knnocc::cli

@@ -36,7 +36,17 @@ OptionGroup knn_model_group(const std::string& title, const std::string& text);
 /// The k-NN model's parameters from its flags; UsageError when they do not fit together.
 KnnModelParams knn_params(const Args& args);
 
-/// The map files `knnocc map` writes besides --out-voxels (--out-bt ... --ply-free), with --up.
+/// The map files `knnocc map` writes besides --out-voxels (-o, --out-bt ... --no-color), with
+/// --up.
 OptionGroup map_output_group();
+
+/// --points-frame sensor|world: the frame of the clouds' points (map).
+Option points_frame_option();
+
+/// --grid-z MIN:MAX, the height band of a 2D grid (map, convert).
+Option grid_z_option();
+
+/// --prob-hit, --prob-miss, --clamp: the OctoMap model's parameters.
+OptionGroup octomap_model_group();
 
 }  // namespace knnocc::cli

@@ -46,10 +46,12 @@ maps:
        .ply                voxels as points (colour = height, property logodds) or cubes
        .pcd .xyz .bin      voxel centres as a point cloud (--voxels, default occupied)
        .png                top and side views, coloured by height
+       .yaml               a 2D grid for ROS map_server / Nav2 (OUT and OUT's .pgm) of the
+                           --grid-z band along --up
 clouds:
   IN   .ply .pcd .xyz .dat .txt .bin (KITTI), or an OctoMap .graph / a sequence folder (all
        scans moved to the world frame and merged)
-  OUT  .ply .pcd .xyz .txt .bin (ids are kept by .ply and .pcd)
+  OUT  .ply .pcd .xyz .txt .bin (ids are kept by .ply and .pcd, colours by .ply)
 A cloud becomes a map with a sensor model, not here: knnocc map --input IN --res R --out-bt OUT.
 Prints what was read (`map N voxels (occupied N, free N)` or `cloud N points`), then what was
 written: `wrote OUT: N occupied voxels as points` and the like.
@@ -68,7 +70,7 @@ written: `wrote OUT: N occupied voxels as points` and the like.
         Option::text("--encoding", "E", "for .ply and .pcd; binary_compressed for .pcd only")
             .fallback("binary")
             .one_of({"ascii", "binary", "binary_compressed"}),
-        up_option("z"), memory_limit_option()},
+        grid_z_option(), up_option("z"), memory_limit_option()},
        ""});
   s.footer =
       "exit status: 0 success, 2 bad input (one line on stderr naming the file and the problem).\n";
@@ -108,8 +110,11 @@ ConvertJob convert_job(const Args& args) {
   j.out = args.positional()[1];
   j.in_ext = lower_extension(j.in);
   j.out_ext = lower_extension(j.out);
-  check_outputs({{"OUT", j.out}});
-  check_outputs_not_inputs({{"OUT", j.out}}, {{"IN", j.in}});
+  const OutputList outputs =
+      j.out_ext == ".yaml" ? OutputList{{"OUT", j.out}, {"OUT", io::ros_map_image_path(j.out)}}
+                           : OutputList{{"OUT", j.out}};
+  check_outputs(outputs);
+  check_outputs_not_inputs(outputs, {{"IN", j.in}});
   j.encoding = args.str("--encoding");
   if (j.encoding == "binary_compressed" && j.out_ext != ".pcd")
     throw UsageError("--encoding binary_compressed is for .pcd output only");
@@ -119,13 +124,17 @@ ConvertJob convert_job(const Args& args) {
   if (j.voxel_list_in && !args.has("--res")) throw UsageError("a voxel-list input needs --res");
   if (!j.voxel_list_in && args.has("--res"))
     throw UsageError("--res only applies to a voxel-list input");
-  const bool map_only_out =
-      j.out_ext == ".bt" || j.out_ext == ".ot" || j.out_ext == ".voxels" || j.out_ext == ".png";
+  const bool map_only_out = j.out_ext == ".bt" || j.out_ext == ".ot" || j.out_ext == ".voxels" ||
+                            j.out_ext == ".png" || j.out_ext == ".yaml";
+  if ((j.out_ext == ".yaml") != args.has("--grid-z"))
+    throw UsageError(args.has("--grid-z") ? "--grid-z needs a .yaml OUT (a 2D grid)"
+                                          : "a 2D grid (.yaml) needs --grid-z MIN:MAX, the "
+                                            "height band along --up that it shows");
   const bool cloud_out = j.out_ext == ".ply" || j.out_ext == ".pcd" || j.out_ext == ".xyz" ||
                          j.out_ext == ".txt" || j.out_ext == ".bin";
   if (!map_only_out && !cloud_out)
     throw UsageError("unknown output extension '" + j.out_ext +
-                     "' (see --help: .bt .ot .voxels .txt .ply .pcd .xyz .bin .png)");
+                     "' (see --help: .bt .ot .voxels .txt .ply .pcd .xyz .bin .png .yaml)");
   if (!j.map_in && map_only_out)
     throw UsageError(j.in + " is a point cloud; make a map with: knnocc map --input " + j.in +
                      " --res R --out-" + j.out_ext.substr(1) + " " + j.out);
@@ -175,6 +184,12 @@ void write_converted_map(const OccupancyMap<OcKey>& map, const ConvertJob& j, co
   if (j.out_ext == ".bt" || j.out_ext == ".ot") {
     j.out_ext == ".bt" ? io::write_bt(out, map) : io::write_ot(out, map);
     std::printf("wrote %s: the whole map as an OctoMap tree\n", out.c_str());
+  } else if (j.out_ext == ".yaml") {
+    MapFileContext ctx;
+    ctx.up = up_axis(args);
+    ctx.band = parse_range("--grid-z", args.str("--grid-z"));
+    std::printf("%s\nwrote %s, %s\n", write_grid_file(map, out, ctx).c_str(), out.c_str(),
+                io::ros_map_image_path(out).c_str());
   } else if (j.out_ext == ".png") {
     write_map_png(out, map, up_axis(args), std::filesystem::path(j.in).filename().string());
     std::printf("wrote %s: a picture of the map\n", out.c_str());
@@ -210,13 +225,18 @@ io::Cloud read_cloud(const std::string& in) {
   io::Cloud cloud;
   Progress progress("convert", source.size());
   std::vector<Point3f> world;
+  bool colored = true;
   for (std::size_t i = 0; i < source.size(); ++i) {
     const io::Scan scan = source.load(i);
     io::transform_to_world(scan.pose, scan.cloud.points, world);
     cloud.points.insert(cloud.points.end(), world.begin(), world.end());
+    colored = colored && !scan.cloud.colors.empty();  // colours only when every scan has them
+    if (colored)
+      cloud.colors.insert(cloud.colors.end(), scan.cloud.colors.begin(), scan.cloud.colors.end());
     progress.update(i + 1);
   }
   progress.finish();
+  if (!colored) cloud.colors.clear();
   return cloud;
 }
 
@@ -224,7 +244,8 @@ int convert_cloud(const ConvertJob& j) {
   const io::Cloud cloud = reading(j.in, [&] { return read_cloud(j.in); });
   const std::vector<std::uint64_t>* ids = cloud.ids.empty() ? nullptr : &cloud.ids;
   if (j.out_ext == ".ply")
-    io::write_ply(j.out, cloud.points, ids, j.encoding != "ascii");
+    io::write_ply(j.out, cloud.points, ids, j.encoding != "ascii",
+                  cloud.colors.empty() ? nullptr : &cloud.colors);
   else if (j.out_ext == ".pcd")
     io::write_pcd(j.out, cloud.points, ids, j.pcd_data());
   else if (j.out_ext == ".bin")

@@ -30,6 +30,7 @@
 #include "common_options.hpp"
 #include "live_corrections.hpp"
 #include "map_picture.hpp"
+#include "map_run.hpp"
 
 namespace knnocc::cli {
 
@@ -100,11 +101,10 @@ bool run_model(const char* name, const Model& model, const std::vector<sim::SimK
   LiveMapper<Model, OcKey, EigenPose> live(res, model);
   std::vector<Correction> corrections;
   for (std::size_t i = 0; i < kfs.size(); ++i) {
-    std::vector<Point3f> pts = kfs[i].cloud.points;
-    std::vector<std::uint64_t> ids = kfs[i].cloud.ids;
-    crop_points(pts, ids, crop);
-    if constexpr (!LiveMapper<Model>::uses_map_cloud) ids.clear();
-    live.add(i, EigenPose::from(run.tracked[i]), std::move(pts), std::move(ids));
+    io::Cloud cloud = kfs[i].cloud;
+    crop_cloud(cloud, crop);
+    if constexpr (!LiveMapper<Model>::uses_map_cloud) cloud.ids.clear();
+    live.add(i, EigenPose::from(run.tracked[i]), std::move(cloud.points), std::move(cloud.ids));
     const auto snap = run.snapshots.find(i);
     if (snap == run.snapshots.end()) continue;
     std::vector<std::pair<std::uint64_t, EigenPose>> poses;

@@ -21,6 +21,7 @@
 #include "input_guard.hpp"
 #include "live_corrections.hpp"
 #include "map_outputs.hpp"
+#include "map_run.hpp"
 #include "map_snapshots.hpp"
 #include "output_set.hpp"
 #include "progress.hpp"
@@ -44,6 +45,11 @@ input (-i, --input PATH):
   an OctoMap .graph     scans with their poses (OctoMap's ScanGraph)
   a point file          .ply, .pcd (VIEWPOINT = sensor pose), KITTI .bin, or ASCII
                         .xyz/.dat/.txt (x y z per line); sensor at the origin
+Points are in the sensor frame, or in the world frame with --points-frame world. A cloud of which
+fewer than 10 % of the points lie in the map's key range in their own coordinates is an error
+naming the likely cause (a time stamp column, millimetres). Clouds with colour (PLY red green
+blue, PCD rgb/rgba) give each occupied voxel the mean colour of the points that hit it, in .ply,
+.html and .ot files (a ColorOcTree; --no-color: a plain OcTree).
 Which model for which sensor: sparse visual-SLAM keyframes with map-point ids -> robust; dense
 depth cameras / LiDAR -> octomap (knn removes far, sparser surfaces of dense clouds; robust
 without ids is octomap's model).
@@ -106,6 +112,7 @@ CommandSpec make_map_spec() {
         Option::number("--crop", "M", "drop points farther than M from their sensor first")
             .fallback_text("no crop")
             .above(0),
+        points_frame_option(),
         Option::flag("--discretize",
                      "reduce each cloud to its distinct endpoint voxels first (OctoMap's "
                      "discretize option; octomap model only)"),
@@ -139,6 +146,7 @@ CommandSpec make_map_spec() {
                      "of poses.txt's (docs/live_mapping.md)")},
        ""});
   s.groups.push_back(map_output_group());
+  s.groups.push_back(octomap_model_group());
   s.groups.push_back(knn_model_group("k-NN model (--model knn)", kKnnText));
   s.groups.push_back({"robust model (--model robust)",
                       {Option::integer("--min-views", "N", "keyframes that confirm a map point")
@@ -169,6 +177,10 @@ struct MapOptions {
   bool discretize = false;
   unsigned threads = 1;
   std::size_t first = 0, count = static_cast<std::size_t>(-1), save_every = 0;
+  MapInput scans;             ///< how scans are read (points frame, crop, colours)
+  OccupancyParams occupancy;  ///< --clamp
+  std::vector<MapFile> files;
+  std::optional<std::pair<double, double>> grid_band;  ///< --grid-z
 };
 
 /// The file an error in scan i is about: the cloud of a sequence, else the input itself.
@@ -222,9 +234,9 @@ struct MapBudget {
 /// A new map at --res, or the --init-map map to continue.
 template <class Model>
 std::unique_ptr<Mapper<Model>> make_mapper(const MapOptions& opt, const Model& model) {
-  const MapperOptions mo{opt.max_range, opt.discretize, opt.threads, {}};
+  const MapperOptions mo{opt.max_range, opt.discretize, opt.threads, opt.occupancy};
   if (opt.init_map.empty()) return std::make_unique<Mapper<Model>>(opt.res, model, mo);
-  OccupancyMap<OcKey> init = read_tree_checked(opt.init_map);
+  OccupancyMap<OcKey> init = read_tree_checked(opt.init_map, opt.occupancy);
   if (opt.res > 0 && std::abs(init.grid().resolution() - opt.res) > 1e-12 * opt.res)
     throw io::Error(opt.init_map,
                     "resolution " + io::detail::round_trip_text(init.grid().resolution()) +
@@ -244,36 +256,37 @@ struct WorldPoints {
   std::vector<std::uint64_t> ids;
 };
 
-/// Scan i into the map: cropped, moved to the world frame, refused when its bricks surely pass
-/// the budget.
+/// Scan i (MapRun::prepare'd: sensor frame, cropped) into the map: moved to the world frame,
+/// refused when its bricks surely pass the budget; its colours join the run's.
 template <class Model>
 KeyframeStats insert_scan(Mapper<Model>& mapper, io::Scan& scan, std::size_t i,
-                          const MapOptions& opt, const MapBudget& budget, WorldPoints& w) {
+                          const MapBudget& budget, WorldPoints& w, MapRun& run) {
   const Point3d origin{scan.pose.t.x(), scan.pose.t.y(), scan.pose.t.z()};
   const double res = mapper.map().grid().resolution();
   const std::size_t enough = budget.enough_bricks();
   if constexpr (Mapper<Model>::uses_map_cloud) {
-    // --crop: distance to the sensor, measured while the points are still in the sensor frame.
-    io::keyframe_to_world(scan.pose, scan.cloud, opt.crop, w.d, w.ids);
+    io::keyframe_to_world(scan.pose, scan.cloud, -1.0, w.d, w.ids);
     if (at_least_bricks(origin, w.d, res, -1.0, false, enough) > enough)
       throw budget.too_big(i,
                            "the points alone need more than " + std::to_string(enough) + " bricks");
+    if constexpr (std::is_same_v<Model, RobustModel>)
+      if (w.ids.empty()) run.note_missing_ids();
+    run.add_colors(origin, w.d, scan.cloud.colors);
     try {
       return mapper.insert_keyframe(scan.pose.t, w.d, w.ids);
     } catch (const std::invalid_argument& e) {  // e.g. clouds with and without ids mixed
-      throw io::Error(source_path_for_errors(opt.input, i), e.what());
+      throw io::Error(source_path_for_errors(run.input().path, i), e.what());
     }
   } else {
     std::vector<Point3f>& pts = scan.cloud.points;
-    std::vector<std::uint64_t> no_ids;
-    crop_points(pts, no_ids, opt.crop);
     if (io::is_identity(scan.pose))
       w.f.swap(pts);
     else
       io::transform_to_world(scan.pose, pts, w.f);
-    if (at_least_bricks(origin, w.f, res, opt.max_range, true, enough) > enough)
+    if (at_least_bricks(origin, w.f, res, run.input().max_range, true, enough) > enough)
       throw budget.too_big(i, "its rays need more than " + std::to_string(enough) + " bricks (" +
                                   format_bytes(double(enough) * kBrickBytesAtLeast) + ")");
+    run.add_colors(origin, w.f, scan.cloud.colors);
     return mapper.insert_keyframe(scan.pose.t, w.f);
   }
 }
@@ -312,6 +325,26 @@ void report_map(const Mapper<Model>& mapper, const Model& model, const MapOption
               total.points, counts.occupied, counts.free, seconds);
 }
 
+/// The map files of a run, written as one set; `note` goes into the .bt/.ot headers
+/// (map_snapshots.hpp). Adds their names to `written` and the lines they print (a 2D grid's
+/// summary) to `notes`.
+void write_map_run_files(const OccupancyMap<OcKey>& map, const Args& args, const MapOptions& opt,
+                         const MapRun& run, const std::string& title, const std::string& note,
+                         std::vector<std::string>& written, std::vector<std::string>& notes) {
+  MapFileContext c = run.file_context(args, title);
+  c.voxels = voxel_selection(opt.which);
+  c.band = opt.grid_band;
+  c.ply = ply_export_options(args);
+  c.note = note;
+  write_map_files(map, opt.files, c, written, notes);
+}
+
+/// The lines after the summary: what the map files said, and which were written.
+void print_files(const std::vector<std::string>& written, const std::vector<std::string>& notes) {
+  for (const std::string& n : notes) std::printf("%s\n", n.c_str());
+  print_written(written);
+}
+
 template <class Model>
 int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -327,14 +360,14 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   // --save-every: the maps record the clouds they hold (map_snapshots.hpp).
   HeldClouds held{first_held_cloud(opt.init_map, opt.input, opt.first), last, opt.input};
   Progress progress("map", last - opt.first);
-  UpEstimator up_estimate;
+  MapRun run(opt.scans, mapper->map().grid().resolution());
   MapTotals totals;
   WorldPoints world;
   for (std::size_t i = opt.first; i < last; ++i) try {
       io::Scan scan = source.load(i);
-      up_estimate.add(scan.pose, scan.cloud.points);
+      run.prepare(scan, mapper->map().grid(), source_path_for_errors(opt.input, i));
       const auto a = std::chrono::steady_clock::now();
-      totals.add(insert_scan(*mapper, scan, i, opt, budget, world));
+      totals.add(insert_scan(*mapper, scan, i, budget, world, run));
       totals.keyframe_ms.push_back(
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
       progress.update(i + 1 - opt.first);
@@ -348,29 +381,52 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
                       out_of_memory_text(opt.memory_limit, "reading or mapping it", budget.res));
     }
   progress.finish();
-  const std::vector<std::string> written = write_map_outputs(
-      mapper->map(), args, opt.which, up_axis(args, up_estimate.result()), model_title(model),
-      opt.save_every ? held_clouds_note(held) : std::string());
+  std::vector<std::string> written, notes;
+  write_map_run_files(mapper->map(), args, opt, run, run.title(model_title(model)),
+                      opt.save_every ? held_clouds_note(held) : std::string(), written, notes);
   report_map(*mapper, model, opt, totals, t0);
-  print_written(written);
+  print_files(written, notes);
   return 0;
+}
+
+/// The map files asked for and what they need, checked before any work.
+void map_file_options(const Args& args, MapOptions& opt) {
+  opt.files = requested_map_files(args, {"--out-voxels", "--out-bt", "--out-ot", "--out-ply",
+                                         "--out-png", "--out-html", "--out-grid"});
+  const OutputList files = map_file_outputs(opt.files);
+  check_outputs(files);
+  check_outputs_not_inputs(files,
+                           requested_inputs(args, {"--input", "--init-map", "--corrections"}));
+  check_map_file_flags(args, opt.files);
+  if (args.has("--grid-z")) opt.grid_band = parse_range("--grid-z", args.str("--grid-z"));
+}
+
+/// The OctoMap model's clamping (--clamp, probabilities) as the map's parameters.
+OccupancyParams occupancy_params(const Args& args) {
+  OccupancyParams p;
+  if (!args.has("--clamp")) return p;
+  const auto [lo, hi] = parse_range("--clamp", args.str("--clamp"));
+  if (!(lo > 0.0 && hi < 1.0 && lo < 0.5 && hi > 0.5))
+    throw UsageError("--clamp needs probabilities 0 < MIN < 0.5 < MAX < 1, got '" +
+                     args.str("--clamp") + "'");
+  p.clamp_min = logodds(lo);
+  p.clamp_max = logodds(hi);
+  return p;
 }
 
 /// The options of a run, checked together (each option's own range is checked by Args).
 MapOptions map_options(const Args& args) {
-  check_map_outputs(args);
-  const OutputList files = requested_outputs(
-      args, {"--out-voxels", "--out-bt", "--out-ot", "--out-ply", "--out-png", "--out-html"});
-  check_outputs(files);
-  check_outputs_not_inputs(files,
-                           requested_inputs(args, {"--input", "--init-map", "--corrections"}));
   MapOptions opt;
+  map_file_options(args, opt);
+  opt.occupancy = occupancy_params(args);
   opt.input = args.str("--input");
   if (!args.has("--res") && !args.has("--init-map"))
     throw UsageError("--res is required (see --help)");
   opt.res = args.has("--res") ? args.number("--res") : 0.0;
   opt.max_range = args.number("--max-range", -1.0);
   opt.crop = args.number("--crop", -1.0);
+  opt.scans = MapInput{opt.input, args.str("--points-frame") == "world", opt.crop, opt.max_range,
+                       !args.flag("--no-color")};
   opt.which = args.str("--voxels");
   opt.discretize = args.flag("--discretize");
   opt.threads = cap_threads("map", args.integer("--threads"));
@@ -400,6 +456,10 @@ void check_model_flags(const Args& args, const std::string& model) {
   if (model == "octomap")
     for (const char* knn_only : {"--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"})
       if (args.has(knn_only)) throw UsageError(std::string(knn_only) + " needs --model knn");
+  if (model != "octomap")
+    for (const char* octomap_only : {"--prob-hit", "--prob-miss", "--clamp"})
+      if (args.has(octomap_only))
+        throw UsageError(std::string(octomap_only) + " needs --model octomap");
   if (model != "robust" && args.has("--min-views"))
     throw UsageError("--min-views needs --model robust");
   if (model != "octomap" && args.flag("--discretize"))
@@ -420,9 +480,16 @@ int run_map(const Args& args) {
   const std::string model = args.str("--model");
   check_model_flags(args, model);
   const MapOptions opt = map_options(args);
+  const auto files = [&](const OccupancyMap<OcKey>& map, const MapRun& run,
+                         const std::string& title, std::vector<std::string>& written,
+                         std::vector<std::string>& notes) {
+    write_map_run_files(map, args, opt, run, title, {}, written, notes);
+  };
   if (model == "octomap") {
-    if (args.has("--corrections")) return run_map_corrections(args, opt, OctoMapModel{});
-    return run_map_with(args, opt, OctoMapModel{});
+    const OctoMapModel om =
+        OctoMapModel::from_probabilities(args.number("--prob-hit"), args.number("--prob-miss"));
+    if (args.has("--corrections")) return run_map_corrections(args, opt, om, files);
+    return run_map_with(args, opt, om);
   }
   if (model == "robust") {
     RobustModelParams rp;
@@ -430,7 +497,8 @@ int run_map(const Args& args) {
     rp.min_views = static_cast<std::uint32_t>(args.integer("--min-views"));
     return run_map_with(args, opt, RobustModel(rp));
   }
-  if (args.has("--corrections")) return run_map_corrections(args, opt, KnnModel(knn_params(args)));
+  if (args.has("--corrections"))
+    return run_map_corrections(args, opt, KnnModel(knn_params(args)), files);
   return run_map_with(args, opt, KnnModel(knn_params(args)));
 }
 

@@ -164,7 +164,8 @@ auto reading(const std::string& path, Read&& read) -> decltype(read()) {
 /// A .bt/.ot map as the tool reads it: resolution checked, memory bounded by the map's share of
 /// --memory-limit; a tree too large for it, or running out while reading it, is one io::Error
 /// naming the file and --memory-limit.
-inline OccupancyMap<OcKey> read_tree_checked(const std::string& path) {
+inline OccupancyMap<OcKey> read_tree_checked(const std::string& path,
+                                             const OccupancyParams& params = {}) {
   const io::OctreeInfo info = io::inspect_octree(path);
   check_tree_resolution(path, info.resolution);
   const double limit = memory_limit_bytes(), share = double(map_memory_share(limit));
@@ -175,7 +176,9 @@ inline OccupancyMap<OcKey> read_tree_checked(const std::string& path) {
                               " as a map, more than the map's share (" + format_bytes(share) +
                               ") of --memory-limit " + format_bytes(limit) +
                               "; a higher --memory-limit reads it");
-  return reading(path, [&] { return io::read_octree(path, tree_read_options()); });
+  io::OctreeReadOptions options = tree_read_options();
+  options.params = params;  // the clamping of the map it becomes (--clamp)
+  return reading(path, [&] { return io::read_octree(path, options); });
 }
 
 /// The part of each ray from `origin` that a scan stores, as the map sees it: endpoints beyond

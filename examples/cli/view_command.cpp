@@ -1,11 +1,14 @@
-// knnocc view MAP... --out page.html: maps in 3D in one self-contained web page.
+// knnocc view MAP... [--out page.html] [--path SEQ]: maps in 3D in one self-contained web page.
 
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <knnocc/io/octomap_tree.hpp>
+#include <knnocc/io/sequence.hpp>
+#include <knnocc/io/trajectory.hpp>
 
 #include "args.hpp"
 #include "commands.hpp"
@@ -25,7 +28,7 @@ CommandSpec make_view_spec() {
   CommandSpec s;
   s.name = "view";
   s.summary = "maps in 3D: one self-contained web page (three.js embedded)";
-  s.usage = "knnocc view MAP... --out PAGE.html [options]";
+  s.usage = "knnocc view MAP... [--out PAGE.html] [--path SEQ] [options]";
   s.text =
       R"(Writes one web page (three.js embedded: it opens without a network) that shows the maps in 3D:
 occupied voxels as cubes coloured by height (the same colours and up axis as the pictures),
@@ -36,14 +39,20 @@ faces than --max-faces is drawn at a coarser level (cells of 2, 4, ... voxels, o
 any voxel in them is), and the page says so.
   MAP                   .bt or .ot (OctoMap trees), or a voxel list (x y z logodds per line, as
                         --out-voxels writes) named .voxels or .txt, which needs --res; at most 64
-Prints `wrote FILE (N maps)`.
+The page is the first MAP's name with .html unless --out names it. --path draws the camera path
+of the sequence the map was built from. Prints `wrote FILE (N maps)`.
 )";
   s.groups.push_back(
       {"options",
-       {Option::text("--out", "FILE", "the page to write").alias("-o").required(),
+       {Option::text("--out", "FILE", "the page to write")
+            .alias("-o")
+            .fallback_text("the first MAP with .html"),
+        Option::text("--path", "SEQ",
+                     "draw a camera path: a sequence folder's poses (up is then estimated from "
+                     "them, as knnocc map does) or a trajectory file (poses.txt format)"),
         Option::text("--names", "A,B,...", "the maps' names on the page")
             .fallback_text("the file names"),
-        up_option("z: map files hold no poses"),
+        up_option("from --path's poses, else z (map files hold no poses)"),
         Option::number("--res", "R", "voxel edge of voxel-list inputs")
             .alias("-r")
             .at_least(kMinResolution),
@@ -87,6 +96,27 @@ OccupancyMap<OcKey> read_view_map(const Args& args, const std::string& in) {
   return read_map_file(in, is_tree_file(in) ? 0.0 : args.number("--res"));
 }
 
+/// The camera positions of --path and the up they suggest (a folder's first cloud tells a camera
+/// from a LiDAR; a trajectory file alone suggests nothing).
+std::vector<Point3d> view_path(const std::string& path, std::optional<UpAxis>& up) {
+  std::vector<io::Pose> poses;
+  if (io::is_sequence_dir(path)) {
+    const io::Sequence seq = io::Sequence::open(path);
+    poses = seq.poses();
+    if (!poses.empty()) {
+      const std::vector<Point3f> first = seq.load_cloud(0).points;
+      UpEstimator estimate;
+      for (const io::Pose& p : poses) estimate.add(p, first);
+      up = estimate.result();
+    }
+  } else {
+    poses = io::read_trajectory(path);
+  }
+  std::vector<Point3d> out;
+  for (const io::Pose& p : poses) out.push_back(Point3d{p.t.x(), p.t.y(), p.t.z()});
+  return out;
+}
+
 }  // namespace
 
 const CommandSpec& view_spec() {
@@ -96,13 +126,17 @@ const CommandSpec& view_spec() {
 
 int run_view(const Args& args) {
   if (args.positional().empty()) throw UsageError("needs at least one MAP (see --help)");
-  const std::string out = args.str("--out");
+  const std::string out = args.str(
+      "--out", std::filesystem::path(args.positional()[0]).replace_extension(".html").string());
   OutputList inputs;
   for (const std::string& in : args.positional()) inputs.emplace_back("MAP", in);
+  if (args.has("--path")) inputs.emplace_back("--path", args.str("--path"));
   check_outputs({{"--out", out}});
   check_outputs_not_inputs({{"--out", out}}, inputs);
-  const UpAxis up = up_axis(args);
   ViewOptions opt;
+  std::optional<UpAxis> path_up;
+  if (args.has("--path")) opt.path = view_path(args.str("--path"), path_up);
+  const UpAxis up = up_axis(args, path_up.value_or(UpAxis{}));
   opt.max_faces = static_cast<std::size_t>(args.integer("--max-faces"));
   const std::vector<std::string> names = view_names(args);
   if (!view_pages_available())

@@ -12,6 +12,7 @@
 
 #include <knnocc/io/cloud.hpp>
 #include <knnocc/io/trajectory.hpp>
+#include <knnocc/map/occupancy_grid_2d.hpp>
 
 #include "args.hpp"
 
@@ -47,15 +48,9 @@ struct ViewFrame {
   UpAxis up;
 
   explicit ViewFrame(UpAxis u = {}) : up(u) {
-    axis[2] = u.axis;
-    sign[2] = u.sign;
-    axis[0] = u.axis == 0 ? 1 : 0;  // right: x, or y when x is up
-    sign[0] = 1;
-    // forward = up x right (unit axis vectors: e_a x e_b = +-e_c for the third axis c).
-    const int a = u.axis, b = axis[0], c = 3 - a - b;
-    const int parity = ((b - a + 3) % 3 == 1) ? 1 : -1;  // e_x x e_y = +e_z, cyclic
-    axis[1] = c;
-    sign[1] = u.sign * parity;
+    const PlaneFrame f = PlaneFrame::with_up(u.axis, u.sign);
+    axis = f.axis;
+    sign = f.sign;
   }
 };
 

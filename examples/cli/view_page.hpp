@@ -4,7 +4,10 @@
 // (a face between two occupied cells is never drawn) and drawn as instanced quads, coloured by
 // height in the vertex shader. When a map has more exposed faces than the budget, the page draws
 // a coarser level (cells of 2, 4, ... voxels: a cell is occupied when any voxel in it is) and
-// says so; free voxels (on a toggle) are points, coarsened the same way.
+// says so; free voxels (on a toggle) are points, coarsened the same way. A map with voxel colours
+// (VoxelColors) sends a colour per drawn cell (the mean of its coloured voxels' colours) and the
+// page offers colour or height; a camera path is drawn as a line. three.js's licence notice goes
+// with the embedded script.
 
 #include <algorithm>
 #include <array>
@@ -12,10 +15,13 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <string>
+#include <unordered_map>
 #include <unordered_set>
 #include <vector>
 
+#include <knnocc/insertion/voxel_colors.hpp>
 #include <knnocc/io/atomic_file.hpp>
 #include <knnocc/io/error.hpp>
 #include <knnocc/map/occupancy_map.hpp>
@@ -33,11 +39,13 @@ namespace knnocc::cli {
 struct ViewMap {
   std::string name;
   const OccupancyMap<OcKey>* map = nullptr;
+  const VoxelColors<OcKey>* colors = nullptr;  ///< the occupied voxels' colours, if any
 };
 
 struct ViewOptions {
   std::size_t max_faces = 2500000;  ///< exposed faces drawn per map before coarsening
   std::size_t max_free = 300000;    ///< free cells drawn per map before coarsening
+  std::vector<Point3d> path;        ///< camera positions (world frame), drawn as a line
 };
 
 /// Whether this build can write pages (three.js found at configure time).
@@ -86,13 +94,31 @@ inline std::uint64_t pack_cell(std::int64_t x, std::int64_t y, std::int64_t z) {
 struct PageCells {
   int level = 0;
   std::string cells, masks;  // u16 x 3 per cell; exposed-face bits +X -X +Y -Y +Z -Z
+  std::string colors;        // r g b a per drawn cell (a = 0: no colour) when the map has them
   std::size_t count = 0, faces = 0;
 };
 
-inline PageCells occupied_cells(const std::vector<std::array<std::int64_t, 3>>& vox, int level) {
+/// The colour sums and counts of the coloured voxels in each cell (`rgb[i]` belongs to `vox[i]`;
+/// a = 0 when the voxel has none; no `rgb` at all: no colours).
+inline std::unordered_map<std::uint64_t, std::array<std::uint32_t, 4>> cell_colors(
+    const std::vector<std::array<std::int64_t, 3>>& vox,
+    const std::vector<std::array<std::uint8_t, 4>>& rgb, int level) {
+  std::unordered_map<std::uint64_t, std::array<std::uint32_t, 4>> sums;
+  for (std::size_t i = 0; i < rgb.size(); ++i) {
+    if (!rgb[i][3]) continue;
+    auto& s = sums[pack_cell(vox[i][0] >> level, vox[i][1] >> level, vox[i][2] >> level)];
+    for (int c = 0; c < 3; ++c) s[c] += rgb[i][c];
+    ++s[3];
+  }
+  return sums;
+}
+
+inline PageCells occupied_cells(const std::vector<std::array<std::int64_t, 3>>& vox,
+                                const std::vector<std::array<std::uint8_t, 4>>& rgb, int level) {
   std::unordered_set<std::uint64_t> set;
   set.reserve(vox.size());
   for (const auto& v : vox) set.insert(pack_cell(v[0] >> level, v[1] >> level, v[2] >> level));
+  const auto colors = cell_colors(vox, rgb, level);
   std::vector<std::uint64_t> sorted(set.begin(), set.end());
   std::sort(sorted.begin(), sorted.end());
   PageCells pc;
@@ -117,6 +143,13 @@ inline PageCells occupied_cells(const std::vector<std::array<std::int64_t, 3>>& 
     put_u16(pc.cells, y);
     put_u16(pc.cells, z);
     pc.masks += static_cast<char>(mask);
+    if (rgb.empty()) continue;
+    const auto it = colors.find(c);
+    const std::array<std::uint32_t, 4> sum =
+        it == colors.end() ? std::array<std::uint32_t, 4>{} : it->second;
+    for (int k = 0; k < 3; ++k)  // the mean, rounded
+      pc.colors += static_cast<char>(sum[3] ? (2 * sum[k] + sum[3]) / (2 * sum[3]) : 0);
+    pc.colors += static_cast<char>(sum[3] ? 255 : 0);
   }
   return pc;
 }
@@ -161,17 +194,23 @@ namespace detail {
 /// Y up), shifted so that the least index per axis is 0 (`lo` holds the shift).
 struct PageVoxels {
   std::vector<std::array<std::int64_t, 3>> occ, fre;
+  std::vector<std::array<std::uint8_t, 4>> rgb;  // per occupied voxel with `colors`; a = 0: none
   std::array<std::int64_t, 3> lo{};
 };
 
-inline PageVoxels page_voxels(const OccupancyMap<OcKey>& map, const std::array<int, 3>& axis,
-                              const std::array<int, 3>& sign) {
+inline PageVoxels page_voxels(const OccupancyMap<OcKey>& map, const VoxelColors<OcKey>* colors,
+                              const std::array<int, 3>& axis, const std::array<int, 3>& sign) {
   PageVoxels pv;
   map.for_each_voxel([&](const OcKey& k, float v) {
     std::array<std::int64_t, 3> d{};
     for (int i = 0; i < 3; ++i)
       d[i] = sign[i] * (static_cast<std::int64_t>(k[axis[i]]) - OcKey::center);
-    (map.is_occupied(v) ? pv.occ : pv.fre).push_back(d);
+    if (!map.is_occupied(v)) return pv.fre.push_back(d);
+    pv.occ.push_back(d);
+    if (!colors) return;
+    const std::optional<knnocc::Rgb> c = colors->mean(k);
+    pv.rgb.push_back(c ? std::array<std::uint8_t, 4>{c->r, c->g, c->b, 255}
+                       : std::array<std::uint8_t, 4>{0, 0, 0, 0});
   });
   for (int i = 0; i < 3; ++i) {
     pv.lo[i] = std::numeric_limits<std::int64_t>::max();
@@ -223,10 +262,10 @@ inline std::string map_json(const ViewMap& vm, const std::array<int, 3>& page_ax
                             std::vector<double>& heights) {
   const auto& map = *vm.map;
   const double res = map.grid().resolution();
-  const PageVoxels pv = page_voxels(map, page_axis, page_sign);
+  const PageVoxels pv = page_voxels(map, vm.colors, page_axis, page_sign);
   PageCells pc;
   for (int level = 0; level <= 16; ++level) {
-    pc = occupied_cells(pv.occ, level);
+    pc = occupied_cells(pv.occ, pv.rgb, level);
     if (pc.faces <= opt.max_faces) break;
   }
   const FreeCells fc = free_cells(pv, opt.max_free);
@@ -256,9 +295,35 @@ inline std::string map_json(const ViewMap& vm, const std::array<int, 3>& page_ax
                 json_string(vm.name).c_str(), res, counts.occupied, counts.free, pc.level, pc.count,
                 pc.masks.size(), pc.faces, fc.level, fc.count, origin[0], origin[1], origin[2],
                 centre[0], centre[1], centre[2], half[0], half[1], half[2]);
-  return std::string(buf) + "\"cellData\":\"" + base64(pc.cells) + "\",\"maskData\":\"" +
-         base64(pc.masks) + "\",\"freeData\":\"" + base64(fc.bytes) + "\"}";
+  std::string json = std::string(buf) + "\"cellData\":\"" + base64(pc.cells) +
+                     "\",\"maskData\":\"" + base64(pc.masks) + "\",\"freeData\":\"" +
+                     base64(fc.bytes) + "\"";
+  if (!pc.colors.empty()) json += ",\"colorData\":\"" + base64(pc.colors) + "\"";
+  return json + "}";
 }
+
+/// The camera path in page coordinates (metres): [x,y,z,x,y,z,...].
+inline std::string path_json(const std::vector<Point3d>& path, const std::array<int, 3>& axis,
+                             const std::array<int, 3>& sign) {
+  std::string json = "[";
+  for (const Point3d& p : path) {
+    const double w[3] = {p.x, p.y, p.z};
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%s%.4f,%.4f,%.4f", json.size() > 1 ? "," : "",
+                  sign[0] * w[axis[0]], sign[1] * w[axis[1]], sign[2] * w[axis[2]]);
+    json += buf;
+  }
+  return json + "]";
+}
+
+#ifdef KNNOCC_TOOL_THREE_JS
+/// three.js with its licence notice first (MIT: the notice goes with every copy).
+inline std::string three_js_script() {
+  std::string js = std::string("\n/*! ") + kThreeJsNotice + "*/\n";
+  for (const char* piece : kThreeJsPieces) js += piece;
+  return js + "\n";
+}
+#endif
 
 }  // namespace detail
 
@@ -280,16 +345,16 @@ inline std::string view_page_html(const std::vector<ViewMap>& maps, UpAxis up,
   char head[512];
   std::snprintf(head, sizeof head,
                 "{\"up\":\"%s\",\"right\":\"%s\",\"forward\":\"%s\",\"heightLo\":%.6g,"
-                "\"heightHi\":%.6g,\"maxFaces\":%zu,\"maps\":[\n",
+                "\"heightHi\":%.6g,\"maxFaces\":%zu,\"path\":",
                 up.name().c_str(), axis_name(vf.axis[0], vf.sign[0]).c_str(),
                 axis_name(vf.axis[1], vf.sign[1]).c_str(), h_lo, h_hi, opt.max_faces);
   std::vector<std::string> scripts;
 #ifdef KNNOCC_TOOL_THREE_JS
-  scripts.emplace_back("\n");
-  for (const char* piece : detail::kThreeJsPieces) scripts.back() += piece;
-  scripts.back() += "\n";
+  scripts.push_back(detail::three_js_script());
 #endif
-  scripts.push_back("\nconst KNNOCC_DATA = " + std::string(head) + maps_json + "]};\n");
+  scripts.push_back("\nconst KNNOCC_DATA = " + std::string(head) +
+                    detail::path_json(opt.path, page_axis, page_sign) + ",\"maps\":[\n" +
+                    maps_json + "]};\n");
   scripts.emplace_back(detail::kViewPageScript);
   std::string html = "<!doctype html>\n<html><head><meta charset=\"utf-8\">\n" +
                      detail::content_security_policy(scripts) + detail::kViewPageHead;

@@ -2,7 +2,8 @@
 // The HTML and JavaScript of knnocc view pages (view_page.hpp puts three.js and the map data
 // between them). Written for three.js r111. The exposed faces become one indexed mesh of quads
 // with 16-bit integer corners (cell units, scaled by the mesh) and a colour per face (height
-// ramp times a fixed light): in headless Chromium's software WebGL this draws about 3x faster
+// ramp, or the cell's own colour when the map has colours and the colour box is ticked, times a
+// fixed light): in headless Chromium's software WebGL this draws about 3x faster
 // than instanced quads with the same work in the vertex shader (bench/bench_view_page). An
 // orbit control of its own (drag: turn, shift/right drag: move, wheel: zoom). When the first
 // frame is drawn (gl.finish), document.title becomes "knnocc view: drawn in N ms" (N from the
@@ -31,11 +32,13 @@ background:linear-gradient(to top,#2640d9,#1abfe6,#33cc40,#f2d926,#d9261a)}
 </style></head>
 <body><canvas id="c"></canvas>
 <div id="panel"><h1>knnocc view</h1><div id="maps"></div><div id="info"></div>
-<label><input type="checkbox" id="free"> free voxels</label><div id="note"></div>
+<label><input type="checkbox" id="free"> free voxels</label>
+<label id="colourbox" hidden><input type="checkbox" id="colour" checked> colours</label>
+<label id="pathbox" hidden><input type="checkbox" id="path" checked> camera path</label><div id="note"></div>
 <div id="help">drag: turn &middot; shift or right drag: move &middot; wheel: zoom &middot; r: reset</div></div>
-<div id="legend"><div id="ltitle">height (m)</div><div id="bar"></div><div id="ticks"></div>
+<div id="legend"><div id="ltitle">height (m)</div><div id="heights"><div id="bar"></div><div id="ticks"></div></div>
 <div><span style="display:inline-block;width:16px;height:10px;background:#c8ccd2"></span> free</div>
-<div style="color:#666">clipped to 2-98 %</div></div>
+<div id="clipnote" style="color:#666">clipped to 2-98 %</div></div>
 )html";
 
 // The page's own script (view_page.hpp puts it in a <script> element and lists its hash).
@@ -60,14 +63,17 @@ const stops = [[0.15, 0.25, 0.85], [0.10, 0.75, 0.90], [0.20, 0.80, 0.25], [0.95
                [0.85, 0.15, 0.10]];  // the pictures' height ramp
 const light = [0.35 / 1.2, 1.0 / 1.2, 0.55 / 1.2];
 // Exposed faces as quads with integer corners in cell units (mesh scale: metres per cell); one
-// colour per face: height ramp times a fixed light.
+// colour per face times a fixed light: the height ramp (col), and the cell's own colour where it
+// has one (colC, maps with colours only).
 function faceMesh(m) {
   const cells = new Uint16Array(bytes(m.cellData).buffer), masks = bytes(m.maskData);
+  const own = m.colorData ? bytes(m.colorData) : null;
   let nf = 0;
   for (let i = 0; i < masks.length; ++i) for (let f = 0; f < 6; ++f) nf += (masks[i] >> f) & 1;
   const pos = new Uint16Array(nf * 12), col = new Uint8Array(nf * 12), idx = new Uint32Array(nf * 6);
+  const colC = own ? new Uint8Array(nf * 12) : null;
   const cellM = m.res * Math.pow(2, m.level), span = D.heightHi - D.heightLo;
-  const c = [0, 0, 0], rgb = [0, 0, 0];
+  const c = [0, 0, 0], rgb = [0, 0, 0], rgbC = [0, 0, 0];
   let k = 0;
   for (let i = 0; i < masks.length; ++i) {
     const mk = masks[i];
@@ -75,6 +81,8 @@ function faceMesh(m) {
     const s = Math.min(1, Math.max(0, (m.origin[1] + (c[1] + 0.5) * cellM - D.heightLo) / span)) * 4;
     const j = Math.min(3, Math.floor(s)), fr = s - j;
     for (let a = 0; a < 3; ++a) rgb[a] = stops[j][a] + (stops[j + 1][a] - stops[j][a]) * fr;
+    const hasOwn = own && own[4 * i + 3];
+    for (let a = 0; a < 3; ++a) rgbC[a] = hasOwn ? own[4 * i + a] / 255 : rgb[a];
     for (let f = 0; f < 6; ++f) {
       if (!((mk >> f) & 1)) continue;
       const axis = f >> 1, neg = f & 1;
@@ -88,6 +96,7 @@ function faceMesh(m) {
         pos[p + t] = c[t] + (v === 1 || v === 2 ? 1 : 0);
         pos[p + b] = c[b] + (v >= 2 ? 1 : 0);
         col[p] = rgb[0] * shade; col[p + 1] = rgb[1] * shade; col[p + 2] = rgb[2] * shade;
+        if (colC) { colC[p] = rgbC[0] * shade; colC[p + 1] = rgbC[1] * shade; colC[p + 2] = rgbC[2] * shade; }
       }
       const q = 6 * k, base = 4 * k;
       idx[q] = base; idx[q + 1] = base + 1; idx[q + 2] = base + 2;
@@ -98,13 +107,25 @@ function faceMesh(m) {
   const g = new THREE.BufferGeometry();
   g.setIndex(new THREE.BufferAttribute(idx, 1));
   g.setAttribute('position', new THREE.BufferAttribute(pos, 3));
-  g.setAttribute('color', new THREE.BufferAttribute(col, 3, true));
+  const heightColours = new THREE.BufferAttribute(col, 3, true);
+  g.setAttribute('color', heightColours);
   const mesh = new THREE.Mesh(g, new THREE.MeshBasicMaterial({vertexColors: THREE.VertexColors}));
   mesh.position.set(m.origin[0], m.origin[1], m.origin[2]);
   mesh.scale.set(cellM, cellM, cellM);
   mesh.frustumCulled = false;
+  mesh.userData = {height: heightColours, own: colC ? new THREE.BufferAttribute(colC, 3, true) : null};
   return {mesh: mesh, faces: nf};
 }
+// The camera path (page coordinates, metres), one line through every position.
+const pathLine = (function () {
+  if (!D.path.length) return null;
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(D.path), 3));
+  const line = new THREE.Line(g, new THREE.LineBasicMaterial({color: 0xc0187a}));
+  line.frustumCulled = false;
+  scene.add(line);
+  return line;
+})();
 const groups = D.maps.map(function (m) {
   const group = new THREE.Group();
   const fm = faceMesh(m), mesh = fm.mesh, nf = fm.faces;
@@ -172,12 +193,20 @@ window.addEventListener('resize', function () {
 });
 
 let current = 0;
-const freeBox = document.getElementById('free');
+const freeBox = document.getElementById('free'), colourBox = document.getElementById('colour');
+const pathBox = document.getElementById('path');
 function fmt(n) { return n.toLocaleString('en-US'); }
 function show(i) {
   current = i;
   groups.forEach(function (g, k) { g.visible = k === i; g.userData.points.visible = freeBox.checked; });
-  const m = D.maps[i];
+  const m = D.maps[i], mesh = groups[i].userData.mesh, own = mesh.userData.own;
+  const useOwn = own !== null && colourBox.checked;
+  mesh.geometry.setAttribute('color', useOwn ? own : mesh.userData.height);
+  document.getElementById('colourbox').hidden = own === null;
+  document.getElementById('heights').hidden = document.getElementById('clipnote').hidden = useOwn;
+  document.getElementById('ltitle').textContent =
+      useOwn ? 'colour of the points' : 'height (m, up = ' + D.up + ')';
+  if (pathLine) pathLine.visible = pathBox.checked;
   document.querySelectorAll('#maps button').forEach(function (b, k) { b.className = k === i ? 'on' : ''; });
   // Names come from file names and flags: text nodes only, never markup.
   const info = document.getElementById('info'), name = document.createElement('b');
@@ -202,9 +231,9 @@ D.maps.forEach(function (m, i) {
   b.textContent = m.name; b.onclick = function () { show(i); };
   mapsDiv.appendChild(b);
 });
-freeBox.onchange = function () { show(current); };
+freeBox.onchange = colourBox.onchange = pathBox.onchange = function () { show(current); };
+document.getElementById('pathbox').hidden = pathLine === null;
 const ticks = document.getElementById('ticks');
-document.getElementById('ltitle').textContent = 'height (m, up = ' + D.up + ')';
 const span = D.heightHi - D.heightLo, step = Math.pow(10, Math.floor(Math.log10(span / 4)));
 const st = span / step > 20 ? step * 5 : span / step > 8 ? step * 2 : step;
 for (let v = Math.ceil(D.heightLo / st) * st; v <= D.heightHi + 1e-9; v += st) {

@@ -13,10 +13,12 @@
 #include "core/memory_limit.hpp"
 #include "core/point3.hpp"
 #include "core/point_traits.hpp"
+#include "core/rgb.hpp"
 
 #include "stats/welford.hpp"
 
 #include "map/brick.hpp"
+#include "map/occupancy_grid_2d.hpp"
 #include "map/occupancy_map.hpp"
 #include "map/same_voxels.hpp"
 #include "map/value_pool.hpp"
@@ -44,6 +46,7 @@
 #include "insertion/scan_inserter.hpp"
 #include "insertion/scan_integrator.hpp"
 #include "insertion/scan_stats.hpp"
+#include "insertion/voxel_colors.hpp"
 
 #include "mapper.hpp"
 

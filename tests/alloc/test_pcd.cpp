@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -224,6 +225,67 @@ TEST_CASE("pcd.binary_compressed is read straight into the cloud, equal to binar
   CHECK(differing == 0);
   CHECK(c.ids == ids);
   CHECK(b.ids == ids);
+}
+
+TEST_CASE("pcd.rgb and rgba fields give colours in every encoding") {
+  // PCL packs 0x00RRGGBB into the 4 bytes of "rgb" (TYPE F) and 0xAARRGGBB into "rgba" (TYPE U).
+  const std::uint32_t packed[3] = {0x00102030u, 0xff00ff7fu, 0x80ffffffu};
+  const std::vector<knnocc::Rgb> expect = {
+      {0x10, 0x20, 0x30}, {0x00, 0xff, 0x7f}, {0xff, 0xff, 0xff}};
+  for (const char* field : {"rgb F", "rgba U"}) {
+    CAPTURE(field);
+    const std::string name(field, std::strchr(field, ' '));
+    const char type = field[name.size() + 1];
+    const std::string header = "VERSION 0.7\nFIELDS x y z " + name + "\nSIZE 4 4 4 4\nTYPE F F F " +
+                               type + "\nCOUNT 1 1 1 1\nWIDTH 3\nHEIGHT 1\nPOINTS 3\n";
+    std::string rows, fields;  // point after point; field after field (binary_compressed)
+    for (int i = 0; i < 3; ++i) {
+      for (const float v : {1.0f * i, 2.0f, 3.0f}) append_le(rows, v);
+      append_le(rows, packed[i]);
+    }
+    for (int f = 0; f < 4; ++f)
+      for (int i = 0; i < 3; ++i)
+        fields += rows.substr(16 * static_cast<std::size_t>(i) + 4 * f, 4);
+    const std::vector<unsigned char> lzf = io::detail::lzf_compress(
+        reinterpret_cast<const unsigned char*>(fields.data()), fields.size());
+    std::string compressed = header + "DATA binary_compressed\n";
+    append_le(compressed, static_cast<std::uint32_t>(lzf.size()));
+    append_le(compressed, static_cast<std::uint32_t>(fields.size()));
+    compressed.append(lzf.begin(), lzf.end());
+    // Ascii: PCL >= 1.8 writes the packed value as an integer, older writers the float.
+    std::string ascii = header + "DATA ascii\n0 2 3 " + std::to_string(packed[0]) + "\n1 2 3 " +
+                        std::to_string(packed[1]) + "\n2 2 3 ";
+    float as_float = 0.0f;
+    std::memcpy(&as_float, &packed[2], 4);
+    char text[64];
+    std::snprintf(text, sizeof text, "%.9g\n", static_cast<double>(as_float));
+    ascii += text;
+    for (const std::string& file : {header + "DATA binary\n" + rows, compressed, ascii}) {
+      const std::string path = pcd_file("colours.pcd");
+      write_file(path, file);
+      const io::Cloud c = io::read_pcd(path);
+      REQUIRE(c.points.size() == 3);
+      CHECK(c.points[2].x == 2.0f);
+      CHECK(c.colors == expect);
+    }
+  }
+  // rgb as three uchar values (COUNT 3) is not PCL's packed colour: skipped.
+  const std::string path = pcd_file("rgb_count3.pcd");
+  write_file(path,
+             "FIELDS x y z rgb\nSIZE 4 4 4 1\nTYPE F F F U\nCOUNT 1 1 1 3\nWIDTH 1\nHEIGHT 1\n"
+             "POINTS 1\nDATA ascii\n1 2 3 4 5 6\n");
+  CHECK(io::read_pcd(path).colors.empty());
+  // An ascii colour that is no number is an error naming the file.
+  write_file(path, kXyzHeader.substr(0, kXyzHeader.find("FIELDS")) +
+                       "FIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F U\nCOUNT 1 1 1 1\nWIDTH 1\n"
+                       "HEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3 red\n");
+  try {
+    (void)io::read_pcd(path);
+    FAIL("no error");
+  } catch (const io::Error& e) {
+    CHECK(e.file() == path);
+    CHECK_MESSAGE(e.problem().find("invalid colour") != std::string::npos, e.problem());
+  }
 }
 
 TEST_CASE("pcd.ascii with extra fields, counts and an organised cloud") {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "../core/point3.hpp"  // knnocc::Point3f
+#include "../core/rgb.hpp"     // knnocc::Rgb
 
 namespace knnocc::io {
 
@@ -13,6 +14,9 @@ struct Cloud {
   // One id per point when the file carries an id property (e.g. ORB-SLAM map-point ids);
   // empty otherwise.
   std::vector<std::uint64_t> ids;
+  // One colour per point when the file carries one (PLY uchar red, green, blue; PCD rgb or
+  // rgba); empty otherwise.
+  std::vector<Rgb> colors;
 };
 
 }  // namespace knnocc::io

@@ -21,6 +21,14 @@
 // compacted, and OctreeReadOptions::max_voxels bounds how many finest voxels a file may claim,
 // so a 20-byte file with a leaf the size of the world is an error, not an allocation.
 // ColorOcTree and OcTreeStamped .ot files are read too (colours ignored).
+//
+// ColorOcTree .ot (write_color_ot): OctoMap's ColorOcTree::write, a float log-odds then r, g, b
+// bytes per node (ColorOcTreeNode::writeData), for a map plus a colour per voxel. Occupied
+// voxels get their colour; free voxels and occupied ones without a colour get ColorOcTree's
+// "no colour" white (255, 255, 255). Inner nodes get the integer mean of their children's
+// colours other than white (getAverageChildColor). ColorOcTree prunes 8 equal leaves whatever
+// their colours and gives the parent their mean; here they are pruned only when their colours
+// are equal too, so that every voxel's colour reads back exactly.
 
 #include <algorithm>
 #include <cstddef>
@@ -29,9 +37,11 @@
 #include <filesystem>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../core/key.hpp"
+#include "../core/rgb.hpp"
 #include "../map/detail/brick_access.hpp"
 #include "../map/occupancy_map.hpp"
 #include "atomic_file.hpp"
@@ -125,15 +135,20 @@ inline std::string format_resolution(double res) {  // std::ostream's default, a
   return text;
 }
 
-// Builds OctoMap's node stream for a map (Full: .ot, else .bt); see the file comment.
-template <bool Full>
+// Builds OctoMap's node stream for a map (Full: .ot, else .bt; Color: ColorOcTree .ot); see the
+// file comment.
+template <bool Full, bool Color = false>
 class OctreeEncoder {
+  static_assert(Full || !Color, "ColorOcTree files are full (.ot) trees");
+
  public:
   using Map = OccupancyMap<OcKey>;
   using Brick = Map::Brick;
 
-  /// `note`: the text of a "# knnocc <note>" header comment (made printable), or empty.
-  OctreeEncoder(const Map& map, const std::string& note) : map_(map), note_(note) {}
+  /// `note`: the text of a "# knnocc <note>" header comment (made printable), or empty;
+  /// `color_of`: the voxels' colours (ColorOcTree files only).
+  OctreeEncoder(const Map& map, const std::string& note, VoxelColorOf<OcKey> color_of = {})
+      : map_(map), note_(note), color_of_(std::move(color_of)) {}
 
   /// The whole file: header and node stream.
   std::string encode() {
@@ -156,9 +171,9 @@ class OctreeEncoder {
     if (!order_.empty()) tree_node(0, 0, order_.size(), root);
 
     std::string out = std::string(Full ? kOtFirstLine : kBtFirstLine) + "\n" + kOctreeComment +
-                      (note_.empty() ? "" : kNotePrefix + printable(note_) + "\n") +
-                      "id OcTree\nsize " + std::to_string(nodes_) + "\nres " +
-                      format_resolution(map_.resolution()) + "\ndata\n";
+                      (note_.empty() ? "" : kNotePrefix + printable(note_) + "\n") + "id " +
+                      (Color ? "ColorOcTree" : "OcTree") + "\nsize " + std::to_string(nodes_) +
+                      "\nres " + format_resolution(map_.resolution()) + "\ndata\n";
     out += data_;
     return out;
   }
@@ -170,9 +185,13 @@ class OctreeEncoder {
     std::uint64_t morton;
     std::size_t index;
   };
+  static constexpr std::size_t kNodeBytes = Full ? (Color ? 8 : 5) : 2;
+  static constexpr Rgb kNoColor{255, 255, 255};  // ColorOcTreeNode's default: "not set"
+
   struct Summary {
-    bool leaf = false;   // the subtree collapsed into one leaf
-    float value = 0.0f;  // the leaf's value, or the max of the children
+    bool leaf = false;     // the subtree collapsed into one leaf
+    float value = 0.0f;    // the leaf's value, or the max of the children
+    Rgb color = kNoColor;  // ColorOcTree: the leaf's colour, or the mean of the children's
   };
 
   // Child index bits x -> 1, y -> 2, z -> 4 at every level: a pre-order walk visits bricks in
@@ -188,18 +207,59 @@ class OctreeEncoder {
   }
 
   bool occupied(float v) const { return map_.is_occupied(v); }
-  bool same(float a, float b) const { return Full ? a == b : occupied(a) == occupied(b); }
+  bool same(const Summary& a, const Summary& b) const {
+    if (!Full) return occupied(a.value) == occupied(b.value);
+    return a.value == b.value && (!Color || a.color == b.color);
+  }
 
-  void leaf(float v, Summary& out) {
-    ++nodes_;
-    if (Full) {
-      char bytes[5];
-      store_le(bytes, v);
-      bytes[4] = 0;
-      data_.append(bytes, 5);
+  // Voxel i of brick b as a leaf: its value and, in a ColorOcTree, its colour when occupied.
+  Summary voxel(const Brick& b, int i) const {
+    Summary s;
+    s.leaf = true;
+    s.value = b.get(i);
+    if constexpr (Color) {
+      if (occupied(s.value))
+        s.color = color_of_(BrickLayout<OcKey>::key_of(b.coord, i)).value_or(kNoColor);
     }
+    return s;
+  }
+
+  // Writes a node's data with an empty child mask: a leaf.
+  void leaf(const Summary& s, Summary& out) {
+    ++nodes_;
+    if constexpr (Full) {
+      char bytes[kNodeBytes];
+      node_data(bytes, s, 0);
+      data_.append(bytes, kNodeBytes);
+    }
+    out = s;
     out.leaf = true;
-    out.value = v;
+  }
+
+  static void node_data(char* at, const Summary& s, unsigned mask) {
+    store_le(at, s.value);
+    if constexpr (Color) {
+      at[4] = static_cast<char>(s.color.r);
+      at[5] = static_cast<char>(s.color.g);
+      at[6] = static_cast<char>(s.color.b);
+    }
+    at[kNodeBytes - 1] = static_cast<char>(mask);
+  }
+
+  // ColorOcTreeNode::getAverageChildColor: the integer mean of the children's colours other than
+  // white; white when there are none.
+  static Rgb mean_color(const Summary (&kids)[8], unsigned present) {
+    unsigned sum[3] = {0, 0, 0}, n = 0;
+    for (int i = 0; i < 8; ++i) {
+      if (!((present >> i) & 1u) || kids[i].color == kNoColor) continue;
+      sum[0] += kids[i].color.r;
+      sum[1] += kids[i].color.g;
+      sum[2] += kids[i].color.b;
+      ++n;
+    }
+    if (n == 0) return kNoColor;
+    return Rgb{static_cast<std::uint8_t>(sum[0] / n), static_cast<std::uint8_t>(sum[1] / n),
+               static_cast<std::uint8_t>(sum[2] / n)};
   }
 
   // A node whose children child(i, summary) -> present emit themselves in order 0..7. With no
@@ -210,7 +270,7 @@ class OctreeEncoder {
     const std::size_t start = data_.size();
     const std::uint64_t nodes_before = nodes_;
     ++nodes_;
-    data_.resize(start + (Full ? 5 : 2));
+    data_.resize(start + kNodeBytes);
     Summary kids[8];
     unsigned present = 0;
     for (int i = 0; i < 8; ++i) {
@@ -222,12 +282,11 @@ class OctreeEncoder {
       return false;
     }
     bool collapse = d > 0 && present == 0xffu;
-    for (int i = 0; collapse && i < 8; ++i)
-      collapse = kids[i].leaf && same(kids[i].value, kids[0].value);
+    for (int i = 0; collapse && i < 8; ++i) collapse = kids[i].leaf && same(kids[i], kids[0]);
     if (collapse) {
       data_.resize(start);
       nodes_ = nodes_before;
-      leaf(kids[0].value, out);
+      leaf(kids[0], out);
       return true;
     }
     float max = -std::numeric_limits<float>::infinity();
@@ -238,16 +297,16 @@ class OctreeEncoder {
       const unsigned code = !kids[i].leaf ? 3u : occupied(kids[i].value) ? 2u : 1u;
       codes |= code << (2 * i);
     }
+    out.leaf = false;
+    out.value = max;
+    if (Color) out.color = mean_color(kids, present);
     char* h = &data_[start];
-    if (Full) {
-      store_le(h, max);
-      h[4] = static_cast<char>(present);
+    if constexpr (Full) {
+      node_data(h, out, present);
     } else {
       h[0] = static_cast<char>(codes & 0xffu);
       h[1] = static_cast<char>(codes >> 8);
     }
-    out.leaf = false;
-    out.value = max;
     return true;
   }
 
@@ -272,9 +331,9 @@ class OctreeEncoder {
 
   bool brick_node(const Brick& b, Summary& out) {
     if (b.known.count() == kBrickVoxels) {  // a whole known brick may be a single leaf
-      const float first = b.get(0);
+      const Summary first = voxel(b, 0);
       bool uniform = true;
-      for (int i = 1; uniform && i < kBrickVoxels; ++i) uniform = same(b.get(i), first);
+      for (int i = 1; uniform && i < kBrickVoxels; ++i) uniform = same(voxel(b, i), first);
       if (uniform) {
         leaf(first, out);
         return true;
@@ -287,7 +346,7 @@ class OctreeEncoder {
     if (d == kOctreeDepth) {
       const int i = x | (y << kBrickBits) | (z << (2 * kBrickBits));
       if (!b.known.test(i)) return false;
-      leaf(b.get(i), out);
+      leaf(voxel(b, i), out);
       return true;
     }
     const int half = 1 << (kOctreeDepth - 1 - d);
@@ -302,6 +361,7 @@ class OctreeEncoder {
 
   const Map& map_;
   std::string note_;
+  VoxelColorOf<OcKey> color_of_;
   std::vector<Entry> order_;
   std::string data_;
   std::uint64_t nodes_ = 0;
@@ -403,6 +463,19 @@ inline void write_ot(const std::string& path, const OccupancyMap<OcKey>& map,
                      const std::string& note = {}) {
   AtomicFile out(path);
   out.write(encode_ot(map, note));
+  out.commit();
+}
+
+/// The bytes of `map` as a ColorOcTree .ot file, with color_of(key) for each occupied voxel
+/// (see the file comment); liboctomap reads it as a ColorOcTree. `note` as encode_bt.
+inline std::string encode_color_ot(const OccupancyMap<OcKey>& map, VoxelColorOf<OcKey> color_of,
+                                   const std::string& note = {}) {
+  return detail::OctreeEncoder<true, true>(map, note, std::move(color_of)).encode();
+}
+inline void write_color_ot(const std::string& path, const OccupancyMap<OcKey>& map,
+                           VoxelColorOf<OcKey> color_of, const std::string& note = {}) {
+  AtomicFile out(path);
+  out.write(encode_color_ot(map, std::move(color_of), note));
   out.commit();
 }
 

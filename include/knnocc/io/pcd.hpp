@@ -3,9 +3,11 @@
 //
 // Reading supports DATA ascii, binary and binary_compressed (LZF, fields stored one after
 // another: all x, then all y, ...). Fields x, y, z must be float scalars (TYPE F, SIZE 4 or 8,
-// COUNT 1); an integer scalar field "id" fills Cloud::ids; every other field (rgb, intensity,
-// normals, descriptors with COUNT > 1, "_" padding) is skipped. WIDTH x HEIGHT must equal
-// POINTS; organised clouds (HEIGHT > 1) are read row by row. VIEWPOINT (tx ty tz qw qx qy qz)
+// COUNT 1); an integer scalar field "id" fills Cloud::ids; a field "rgb" or "rgba" (SIZE 4,
+// COUNT 1, TYPE F, U or I: PCL's packed 0x00RRGGBB / 0xAARRGGBB, alpha ignored; in ascii files
+// an integer or the float whose bits hold the colour) fills Cloud::colors; every other field
+// (intensity, normals, descriptors with COUNT > 1, "_" padding) is skipped. WIDTH x HEIGHT must
+// equal POINTS; organised clouds (HEIGHT > 1) are read row by row. VIEWPOINT (tx ty tz qw qx qy qz)
 // is returned in PcdInfo, points are returned as stored.
 //
 // NaN/Inf coordinates are returned as read (the mapping layer skips and counts them). Every
@@ -23,6 +25,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <string>
 #include <unordered_set>
 #include <utility>
@@ -64,7 +67,7 @@ struct PcdHeader {
   std::size_t tokens = 0;       // values per point
   std::size_t data_offset = 0;
   std::size_t line_count = 0;
-  int x = -1, y = -1, z = -1, id = -1;
+  int x = -1, y = -1, z = -1, id = -1, rgb = -1;
 };
 
 inline PcdHeader parse_pcd_header(const std::string& path, const char* data, std::size_t size) {
@@ -199,6 +202,8 @@ inline PcdHeader parse_pcd_header(const std::string& path, const char* data, std
     if (f.name == "y") h.y = idx;
     if (f.name == "z") h.z = idx;
     if (f.name == "id") h.id = idx;
+    if ((f.name == "rgb" || f.name == "rgba") && h.rgb < 0 && f.size == 4 && f.count == 1)
+      h.rgb = idx;
     h.fields.push_back(f);
   }
   for (const int* slot : {&h.x, &h.y, &h.z}) {
@@ -239,9 +244,16 @@ inline std::int64_t pcd_integer(const unsigned char* p, const PcdField& f) {
   }
 }
 
-// Points from binary data where value j of point i lies at base[f] + i * stride[f].
+// PCL's packed colour: the 4 bytes of an rgb/rgba value as 0x(AA)RRGGBB.
+inline Rgb pcd_color(std::uint32_t packed) {
+  return Rgb{static_cast<std::uint8_t>(packed >> 16), static_cast<std::uint8_t>(packed >> 8),
+             static_cast<std::uint8_t>(packed)};
+}
+
+// Points from binary data where value j of point i lies at base[f] + i * stride[f]; the slots
+// are x, y, z, id, rgb.
 inline Cloud pcd_gather(const std::string& path, const PcdHeader& h, std::size_t n,
-                        const unsigned char* const base[4], const std::size_t stride[4]) {
+                        const unsigned char* const base[5], const std::size_t stride[5]) {
   Cloud cloud;
   cloud.points.resize(n);
   const PcdField& fx = h.fields[static_cast<std::size_t>(h.x)];
@@ -261,6 +273,11 @@ inline Cloud pcd_gather(const std::string& path, const PcdHeader& h, std::size_t
       cloud.ids[i] = static_cast<std::uint64_t>(id);
     }
   }
+  if (h.rgb >= 0) {
+    cloud.colors.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      cloud.colors[i] = pcd_color(load_le<std::uint32_t>(base[4] + i * stride[4]));
+  }
   return cloud;
 }
 
@@ -271,8 +288,9 @@ struct PcdFieldBlocks {
   PcdFieldBlocks(const std::string& file, const PcdHeader& h, std::size_t n) : path(file) {
     cloud.points.resize(n);
     if (h.id >= 0) cloud.ids.resize(n);
-    const int slots[4] = {h.x, h.y, h.z, h.id};
-    for (int k = 0; k < 4; ++k) {
+    if (h.rgb >= 0) cloud.colors.resize(n);
+    const int slots[5] = {h.x, h.y, h.z, h.id, h.rgb};
+    for (int k = 0; k < 5; ++k) {
       if (slots[k] < 0) continue;
       Block& b = blocks[used++];
       b.slot = k;
@@ -318,7 +336,7 @@ struct PcdFieldBlocks {
 
  private:
   struct Block {
-    int slot = 0;  // 0-2: x, y, z; 3: id
+    int slot = 0;  // 0-2: x, y, z; 3: id; 4: rgb
     const PcdField* field = nullptr;
     std::uint64_t begin = 0, end = 0;
     std::size_t stride = 0;
@@ -331,12 +349,16 @@ struct PcdFieldBlocks {
       (b.slot == 0 ? cloud.points[i].x : b.slot == 1 ? cloud.points[i].y : cloud.points[i].z) = v;
       return;
     }
+    if (b.slot == 4) {
+      cloud.colors[i] = pcd_color(load_le<std::uint32_t>(p));
+      return;
+    }
     const std::int64_t id = pcd_integer(p, *b.field);
     if (id < 0) throw Error(path, "point " + std::to_string(i) + " has a negative or huge id");
     cloud.ids[i] = static_cast<std::uint64_t>(id);
   }
 
-  Block blocks[4];
+  Block blocks[5];
   int used = 0;
 };
 
@@ -344,16 +366,16 @@ inline Cloud read_pcd_binary(const std::string& path, const PcdHeader& h, const 
                              std::size_t remaining) {
   const std::uint64_t points = h.info.points;
   const std::size_t rec = h.record_size;
-  const int slots[4] = {h.x, h.y, h.z, h.id < 0 ? h.x : h.id};
-  const unsigned char* base[4];
-  std::size_t stride[4];
+  const int slots[5] = {h.x, h.y, h.z, h.id < 0 ? h.x : h.id, h.rgb < 0 ? h.x : h.rgb};
+  const unsigned char* base[5];
+  std::size_t stride[5];
   if (h.info.data == PcdData::binary) {
     if (points > remaining / rec) {
       throw Error(path, "file truncated: POINTS " + std::to_string(points) + " x " +
                             std::to_string(rec) + " bytes but only " + std::to_string(remaining) +
                             " bytes of data");
     }
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < 5; ++k) {
       base[k] = p + h.fields[static_cast<std::size_t>(slots[k])].offset;
       stride[k] = rec;
     }
@@ -390,6 +412,21 @@ inline Cloud read_pcd_binary(const std::string& path, const PcdHeader& h, const 
   return std::move(blocks.cloud);
 }
 
+// An ascii rgb/rgba value: PCL writes the packed colour as an unsigned integer (since 1.8), older
+// writers the float whose bits hold it.
+inline std::optional<std::uint32_t> pcd_ascii_color(const char* b, const char* e) {
+  std::uint64_t u = 0;
+  if (parse_int_token(b, e, u)) {
+    if (u > 0xFFFFFFFFull) return std::nullopt;
+    return static_cast<std::uint32_t>(u);
+  }
+  float f = 0.0f;
+  if (!parse_real_token(b, e, f)) return std::nullopt;
+  std::uint32_t bits = 0;
+  std::memcpy(&bits, &f, sizeof bits);
+  return bits;
+}
+
 inline Cloud read_pcd_ascii(const std::string& path, const PcdHeader& h, const char* p,
                             const char* end) {
   const std::uint64_t points = h.info.points;
@@ -402,10 +439,13 @@ inline Cloud read_pcd_ascii(const std::string& path, const PcdHeader& h, const c
   Cloud cloud;
   cloud.points.resize(n);
   if (h.id >= 0) cloud.ids.resize(n);
+  if (h.rgb >= 0) cloud.colors.resize(n);
   const std::size_t tx = h.fields[static_cast<std::size_t>(h.x)].first_token;
   const std::size_t ty = h.fields[static_cast<std::size_t>(h.y)].first_token;
   const std::size_t tz = h.fields[static_cast<std::size_t>(h.z)].first_token;
   const std::size_t tid = h.id >= 0 ? h.fields[static_cast<std::size_t>(h.id)].first_token : 0;
+  const std::size_t trgb =
+      h.rgb >= 0 ? h.fields[static_cast<std::size_t>(h.rgb)].first_token : ~std::size_t{0};
   std::size_t i = 0;
   for_each_line(p, end, [&](std::size_t line, const char* b, const char* e) {
     const std::string at = "line " + std::to_string(line + h.line_count) + ": ";
@@ -426,6 +466,10 @@ inline Cloud read_pcd_ascii(const std::string& path, const PcdHeader& h, const c
           throw Error(path, at + "invalid id " + quote_token(b, te));
         }
         if (i < n) cloud.ids[i] = static_cast<std::uint64_t>(id);
+      } else if (t == trgb) {
+        const auto packed = pcd_ascii_color(b, te);
+        if (!packed) throw Error(path, at + "invalid colour " + quote_token(b, te));
+        if (i < n) cloud.colors[i] = pcd_color(*packed);
       }
       ++t;
       b = te;

@@ -3,11 +3,13 @@
 //
 // Reading supports "format ascii 1.0", "binary_little_endian 1.0" and "binary_big_endian 1.0".
 // The "vertex" element must have scalar properties x, y, z of type float/float32/double/float64
-// (doubles are narrowed to float); an optional integer property "id" fills Cloud::ids. Any other
-// vertex property of a PLY scalar type is skipped. Other elements (e.g. "face" with list
-// properties) are skipped when they follow "vertex"; in binary files an element with a list
-// property *before* "vertex" is rejected, since skipping it would need a per-record walk.
-// comment/obj_info header lines are ignored and CRLF line ends are tolerated in the header.
+// (doubles are narrowed to float); an optional integer property "id" fills Cloud::ids, and
+// uchar (uint8) properties "red", "green" and "blue", all three, fill Cloud::colors (colours of
+// another type are skipped). Any other vertex property of a PLY scalar type is skipped. Other
+// elements (e.g. "face" with list properties) are skipped when they follow "vertex"; in binary
+// files an element with a list property *before* "vertex" is rejected, since skipping it would need
+// a per-record walk. comment/obj_info header lines are ignored and CRLF line ends are tolerated in
+// the header.
 //
 // NaN and Inf coordinates are NOT an error here: they are returned as read, and the mapping layer
 // skips and counts them. Every problem with the file itself (cannot open, not a PLY, unknown
@@ -251,7 +253,28 @@ inline std::int64_t load_integer(const unsigned char* p, PlyType t, bool swap) n
 struct PlyVertexLayout {
   std::size_t index = 0;  // position of "vertex" in the element list
   int x = -1, y = -1, z = -1, id = -1;
+  int rgb[3] = {-1, -1, -1};  // red, green, blue: all three uchar, or all -1
+
+  bool has_color() const { return rgb[0] >= 0; }
+  int color_channel(int slot) const {  // 0-2 when `slot` is a colour property, else -1
+    for (int c = 0; c < 3; ++c)
+      if (has_color() && rgb[c] == slot) return c;
+    return -1;
+  }
 };
+
+// The vertex's uchar red, green and blue properties, when it has all three.
+inline void locate_colour(const PlyElement& el, PlyVertexLayout& v) {
+  const char* const names[3] = {"red", "green", "blue"};
+  int slots[3];
+  for (int c = 0; c < 3; ++c) {
+    slots[c] = el.find(names[c]);
+    if (slots[c] < 0) return;
+    const PlyProperty& prop = el.props[static_cast<std::size_t>(slots[c])];
+    if (prop.is_list || prop.type != PlyType::u8) return;
+  }
+  for (int c = 0; c < 3; ++c) v.rgb[c] = slots[c];
+}
 
 inline PlyVertexLayout locate_vertex(const std::string& path, const PlyHeader& h) {
   PlyVertexLayout v;
@@ -284,6 +307,7 @@ inline PlyVertexLayout locate_vertex(const std::string& path, const PlyHeader& h
       throw Error(path, "vertex property 'id' must be an integer scalar");
     }
   }
+  locate_colour(el, v);
   return v;
 }
 
@@ -352,6 +376,15 @@ inline Cloud read_ply_binary(const std::string& path, const PlyHeader& h, const 
         throw Error(path, "vertex " + std::to_string(i) + " has negative id " + std::to_string(id));
       }
       cloud.ids[i] = static_cast<std::uint64_t>(id);
+    }
+  }
+  if (v.has_color()) {
+    std::size_t at[3];
+    for (int c = 0; c < 3; ++c) at[c] = el.props[static_cast<std::size_t>(v.rgb[c])].offset;
+    cloud.colors.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const unsigned char* r = p + i * rec;
+      cloud.colors[i] = Rgb{r[at[0]], r[at[1]], r[at[2]]};
     }
   }
   return cloud;
@@ -427,6 +460,7 @@ inline Cloud read_ply_ascii(const std::string& path, const PlyHeader& h, const P
   Cloud cloud;
   cloud.points.resize(n);
   if (v.id >= 0) cloud.ids.resize(n);
+  if (v.has_color()) cloud.colors.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     float xyz[3] = {0.0f, 0.0f, 0.0f};
     for (std::size_t j = 0; j < el.props.size(); ++j) {
@@ -461,6 +495,14 @@ inline Cloud read_ply_ascii(const std::string& path, const PlyHeader& h, const P
           throw Error(path, where(el, i) + ": negative id " + std::to_string(id));
         }
         cloud.ids[i] = static_cast<std::uint64_t>(id);
+      } else if (const int c = v.color_channel(slot); c >= 0) {
+        std::uint64_t value = 0;
+        if (!parse_int_token(b, e, value) || value > 255) {
+          throw Error(path, where(el, i) + ": cannot parse " + quote_token(b, e) +
+                                " as a colour (0-255, property " + prop.name + ")");
+        }
+        std::uint8_t* rgb[3] = {&cloud.colors[i].r, &cloud.colors[i].g, &cloud.colors[i].b};
+        *rgb[c] = static_cast<std::uint8_t>(value);
       }
     }
     cloud.points[i] = Point3f{xyz[0], xyz[1], xyz[2]};
@@ -484,15 +526,20 @@ inline Cloud read_ply(const std::string& path) {
                                  buf.size() - h.data_offset);
 }
 
-// Writes "float x y z" (+ "uint id" when ids is given) as binary little-endian or ascii PLY.
-// ids must have one entry per point and each must fit in 32 bits. Atomic: temp file + rename.
+// Writes "float x y z" (+ "uint id" when ids is given, + "uchar red green blue" when colors is
+// given) as binary little-endian or ascii PLY. ids and colors must have one entry per point and
+// each id must fit in 32 bits. Atomic: temp file + rename.
 inline void write_ply(const std::string& path, const std::vector<Point3f>& pts,
-                      const std::vector<std::uint64_t>* ids = nullptr, bool binary = true) {
-  if (ids) {
-    if (ids->size() != pts.size()) {
-      throw Error(path, "write_ply: " + std::to_string(ids->size()) + " ids for " +
+                      const std::vector<std::uint64_t>* ids = nullptr, bool binary = true,
+                      const std::vector<Rgb>* colors = nullptr) {
+  const auto check_size = [&](std::size_t n, const char* what) {
+    if (n != pts.size()) {
+      throw Error(path, "write_ply: " + std::to_string(n) + " " + what + " for " +
                             std::to_string(pts.size()) + " points");
     }
+  };
+  if (ids) {
+    check_size(ids->size(), "ids");
     for (std::size_t i = 0; i < ids->size(); ++i) {
       if ((*ids)[i] > 0xFFFFFFFFull) {
         throw Error(path, "write_ply: id " + std::to_string((*ids)[i]) + " of point " +
@@ -500,19 +547,21 @@ inline void write_ply(const std::string& path, const std::vector<Point3f>& pts,
       }
     }
   }
+  if (colors) check_size(colors->size(), "colours");
   std::string header = "ply\nformat ";
   header += binary ? "binary_little_endian 1.0\n" : "ascii 1.0\n";
   header += "comment written by knnocc\nelement vertex " + std::to_string(pts.size()) +
             "\nproperty float x\nproperty float y\nproperty float z\n";
   if (ids) header += "property uint id\n";
+  if (colors) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   header += "end_header\n";
 
   AtomicFile out(path);
   out.write(header);
   if (binary) {
-    const std::size_t rec = ids ? 16 : 12;
+    const std::size_t rec = 12 + (ids ? 4 : 0) + (colors ? 3 : 0);
     std::vector<char> body(pts.size() * rec);
-    if (!ids && detail::host_is_little_endian()) {
+    if (rec == 12 && detail::host_is_little_endian()) {
       if (!pts.empty()) std::memcpy(body.data(), pts.data(), body.size());
     } else {
       for (std::size_t i = 0; i < pts.size(); ++i) {
@@ -520,7 +569,17 @@ inline void write_ply(const std::string& path, const std::vector<Point3f>& pts,
         detail::store_le(r, pts[i].x);
         detail::store_le(r + 4, pts[i].y);
         detail::store_le(r + 8, pts[i].z);
-        if (ids) detail::store_le(r + 12, static_cast<std::uint32_t>((*ids)[i]));
+        r += 12;
+        if (ids) {
+          detail::store_le(r, static_cast<std::uint32_t>((*ids)[i]));
+          r += 4;
+        }
+        if (colors) {
+          const Rgb c = (*colors)[i];
+          r[0] = static_cast<char>(c.r);
+          r[1] = static_cast<char>(c.g);
+          r[2] = static_cast<char>(c.b);
+        }
       }
     }
     out.write(body.data(), body.size());
@@ -542,11 +601,23 @@ inline void write_ply(const std::string& path, const std::vector<Point3f>& pts,
         *w++ = ' ';
         w = std::to_chars(w, lim, (*ids)[i]).ptr;
       }
+      if (colors) {
+        for (const std::uint8_t v : {(*colors)[i].r, (*colors)[i].g, (*colors)[i].b}) {
+          *w++ = ' ';
+          w = std::to_chars(w, lim, unsigned{v}).ptr;
+        }
+      }
       *w++ = '\n';
     }
     out.write(chunk.data(), static_cast<std::size_t>(w - chunk.data()));
   }
   out.commit();
+}
+
+/// Writes a cloud with every column it has (ids, colours); see above.
+inline void write_ply_cloud(const std::string& path, const Cloud& cloud, bool binary = true) {
+  write_ply(path, cloud.points, cloud.ids.empty() ? nullptr : &cloud.ids, binary,
+            cloud.colors.empty() ? nullptr : &cloud.colors);
 }
 
 }  // namespace knnocc::io

@@ -156,8 +156,8 @@ inline void keyframe_to_world(const Pose& pose, const Cloud& cloud, double max_r
 }
 
 // Writes a sequence folder that Sequence::open reads back: clouds/NNNNNN.ply (binary, float xyz,
-// plus uint ids when the clouds have them) and poses.txt, written last, so a folder interrupted
-// half-way is not mistaken for a sequence. Each file is written atomically.
+// plus uint ids and uchar red green blue when the clouds have them) and poses.txt, written last, so
+// a folder interrupted half-way is not mistaken for a sequence. Each file is written atomically.
 inline void write_sequence(const std::string& dir, const std::vector<Pose>& poses,
                            const std::vector<const Cloud*>& clouds) {
   namespace fs = std::filesystem;
@@ -170,9 +170,7 @@ inline void write_sequence(const std::string& dir, const std::vector<Pose>& pose
   for (std::size_t i = 0; i < clouds.size(); ++i) {
     char name[32];
     std::snprintf(name, sizeof name, "%06zu.ply", i);
-    const Cloud& c = *clouds[i];
-    write_ply((fs::path(dir) / "clouds" / name).string(), c.points,
-              c.ids.empty() ? nullptr : &c.ids);
+    write_ply_cloud((fs::path(dir) / "clouds" / name).string(), *clouds[i]);
   }
   std::string text = "# stamp tx ty tz qx qy qz qw (sensor to world)\n";
   for (const Pose& p : poses) {

@@ -214,4 +214,14 @@ inline void transform_to_world(const Pose& pose, const std::vector<Point3f>& in,
   }
 }
 
+// The inverse: points in the world frame to the sensor frame, in place, p = R^T (w - t) in
+// double. For clouds stored in world coordinates (`knnocc map --points-frame world`).
+inline void transform_to_sensor(const Pose& pose, std::vector<Point3f>& points) {
+  const Eigen::Matrix3d Rt = pose.q.toRotationMatrix().transpose();
+  for (Point3f& p : points) {
+    const Eigen::Vector3d s = Rt * (Eigen::Vector3d(p.x, p.y, p.z) - pose.t);
+    p = Point3f{detail::to_float(s.x()), detail::to_float(s.y()), detail::to_float(s.z())};
+  }
+}
+
 }  // namespace knnocc::io

@@ -3,19 +3,21 @@
 // cube (8 corners, 6 quad faces) per voxel. Binary little-endian (or ascii), atomic.
 //
 // Vertices carry "uchar red green blue" (occupied voxels coloured by height over the exported
-// range, free voxels light grey) and, for points, "float logodds" (a scalar field in
-// CloudCompare). Voxels are written sorted by key (x, then y, then z), so the same map always
-// gives the same file.
+// range, or by their own colour when a colour lookup gives one; free voxels light grey) and, for
+// points, "float logodds" (a scalar field in CloudCompare). Voxels are written sorted by key (x,
+// then y, then z), so the same map always gives the same file.
 
 #include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "../core/rgb.hpp"
 #include "../map/occupancy_map.hpp"
 #include "atomic_file.hpp"
 #include "detail/bytes.hpp"
@@ -110,10 +112,12 @@ class PlyBody {  // binary or ascii records of float / uchar / int values
 
 }  // namespace detail
 
-/// Writes the selected voxels of `map` as PLY points or cubes. Returns the number of voxels.
+/// Writes the selected voxels of `map` as PLY points or cubes; occupied voxels for which
+/// `color_of` gives a colour get it. Returns the number of voxels.
 template <class Key>
 std::size_t write_voxels_ply(const std::string& path, const OccupancyMap<Key>& map,
-                             const VoxelExportOptions& options = {}) {
+                             const VoxelExportOptions& options = {},
+                             const VoxelColorOf<Key>& color_of = {}) {
   const std::vector<detail::ExportedVoxel> voxels = detail::select_voxels(map, options.which);
   const bool cubes = options.shape == VoxelShape::cubes;
   if (cubes &&
@@ -129,6 +133,9 @@ std::size_t write_voxels_ply(const std::string& path, const OccupancyMap<Key>& m
   const double zspan = zmax > zmin ? zmax - zmin : 1.0;
   auto colour = [&](const detail::ExportedVoxel& v) {
     if (!v.occupied) return std::array<std::uint8_t, 3>{200, 200, 200};
+    if (color_of)
+      if (const std::optional<Rgb> c = color_of(Key::unpack(v.key)))
+        return std::array<std::uint8_t, 3>{c->r, c->g, c->b};
     return detail::height_colour((v.c[2] - zmin) / zspan);
   };
 

@@ -24,14 +24,15 @@
 namespace knnocc::bench {
 
 /// The first pass over simulated keyframes (as `knnocc map --model knn2022` does over a
-/// sequence): the parameters with mu and sigma of the whole sequence.
+/// sequence; crop > 0: the points within crop of their camera): the parameters with mu and
+/// sigma of the whole sequence.
 inline Knn2022Params knn2022_first_pass(const std::vector<sim::SimKeyframe>& kfs,
-                                        const Knn2022Params& p) {
+                                        const Knn2022Params& p, double crop = -1.0) {
   Knn2022FirstPass pass(p);
   std::vector<Point3d> world;
   std::vector<std::uint64_t> ids;
   for (const sim::SimKeyframe& kf : kfs) {
-    io::keyframe_to_world(kf.pose, kf.cloud, -1.0, world, ids);
+    io::keyframe_to_world(kf.pose, kf.cloud, crop, world, ids);
     pass.add(Point3d{kf.pose.t.x(), kf.pose.t.y(), kf.pose.t.z()}, world);
   }
   return pass.params();

@@ -47,6 +47,21 @@ void add_regime_groups(CommandSpec& s) {
             .at_least(0)
             .at_most(10)},
        ""});
+  s.groups.push_back(
+      {"features (override --regime)",
+       {Option::number("--detect", "P",
+                       "probability that a keyframe observes a feature it sees (the mean over "
+                       "features with --detect-spread)")
+            .fallback_text(format_number(p.detect) + ", or the --regime's")
+            .above(0)
+            .at_most(1),
+        Option::number("--detect-spread", "S",
+                       "each feature its own detection probability: --detect times a log-normal "
+                       "factor of mean 1 and log-sd S (at most 1)")
+            .fallback_text("0, or the --regime's")
+            .at_least(0)
+            .at_most(3)},
+       ""});
 }
 
 CommandSpec make_sim_spec() {
@@ -104,21 +119,6 @@ keyframes write about 0.9 GB).
                      "below override it")
             .fallback("isolated")
             .one_of({"isolated", "clustered", "repeated", "realistic"})},
-       ""});
-  s.groups.push_back(
-      {"features (override --regime)",
-       {Option::number("--detect", "P",
-                       "probability that a keyframe observes a feature it sees (the mean over "
-                       "features with --detect-spread)")
-            .fallback_text(format_number(p.detect) + ", or the --regime's")
-            .above(0)
-            .at_most(1),
-        Option::number("--detect-spread", "S",
-                       "each feature its own detection probability: --detect times a log-normal "
-                       "factor of mean 1 and log-sd S (at most 1)")
-            .fallback_text("0, or the --regime's")
-            .at_least(0)
-            .at_most(3)},
        ""});
   add_regime_groups(s);
   return s;

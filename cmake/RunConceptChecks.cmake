@@ -11,7 +11,7 @@ file(GLOB _sources "${ROOT}/${DIR}/*.cpp")
 if(NOT _sources)
   message(FATAL_ERROR "no sources in ${ROOT}/${DIR}")
 endif()
-string(REPLACE "|" ";" _includes "${_includes}")  # further -I flags, '|'-separated
+string(REPLACE "|" ";" _includes "${INCLUDES}")  # further -I flags, '|'-separated
 foreach(_source IN LISTS _sources)
   file(STRINGS "${_source}" _first LIMIT_COUNT 1)
   if(NOT _first MATCHES "^// expect: (.+)$")

@@ -88,7 +88,9 @@ TEST_CASE("args: every declared check refuses with one line naming the option") 
   CHECK(err({"--max-range", "0"}) == "--max-range must be > 0, or < 0, got 0");
   CHECK(err({"--max-range", "-1"}).empty());
   CHECK(err({"--model", "robust"}) == "--model must be octomap or knn, got 'robust'");
-  CHECK(err({"--memory-limit", "1M"}).find("at least 16M") != std::string::npos);
+  CHECK(err({"--memory-limit", "1M"}).find("from 16M to 1000000T") != std::string::npos);
+  CHECK(err({"--memory-limit", "1e30"}).find("from 16M to 1000000T") != std::string::npos);
+  CHECK(err({"--memory-limit", "1e300T"}).find("from 16M to 1000000T") != std::string::npos);
   CHECK(err({"--res", "0.1", "--res", "0.2"}) == "--res given twice");
   CHECK(err({"--res"}) == "--res needs a value");
   CHECK(err({"--res", "--k", "3"}) == "--res needs a value, got the option --k");

@@ -1,5 +1,5 @@
-// The bad-input matrix (docs/reliability.md, "Defined behaviour on bad data"), through the public Mapper with
-// both sensor models: each row's defined behaviour, asserted.
+// The bad-input matrix (docs/reliability.md, "Defined behaviour on bad data"), through the public
+// Mapper with both sensor models: each row's defined behaviour, asserted.
 
 #include <doctest/doctest.h>
 

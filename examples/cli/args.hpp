@@ -56,7 +56,7 @@ class Option {
   static Option integer(std::string name, std::string value, std::string help) {
     return Option(std::move(name), ValueType::integer, std::move(value), std::move(help));
   }
-  /// A memory size such as 800M or 4G (decimal units K M G T, optional B), at least 16M.
+  /// A memory size such as 800M or 4G (decimal units K M G T, optional B), from 16M to 1e18 bytes.
   static Option size(std::string name, std::string value, std::string help) {
     return Option(std::move(name), ValueType::size, std::move(value), std::move(help));
   }
@@ -169,9 +169,10 @@ class Option {
                          : unit == "G" ? 1e9
                          : unit == "T" ? 1e12
                                        : 0;
-    if (s.empty() || end == s.c_str() || scale == 0 || !std::isfinite(v) || v * scale < 16e6)
-      throw UsageError(name_ + " expects a size of at least 16M such as 800M or 4G, got '" + s +
-                       "'");
+    if (s.empty() || end == s.c_str() || scale == 0 || !std::isfinite(v) || v * scale < 16e6 ||
+        v * scale > 1e18)
+      throw UsageError(name_ + " expects a size from 16M to 1000000T such as 800M or 4G, got '" +
+                       s + "'");
     return v * scale;
   }
 

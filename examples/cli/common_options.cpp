@@ -38,6 +38,23 @@ Option up_option(const std::string& fallback) {
       .fallback_text(fallback);
 }
 
+Option scene_option(const std::string& help) {
+  return Option::text("--scene", "NAME", help).one_of({"tree", "room", "loop"});
+}
+
+Option demo_res_option() {
+  return Option::number("--res", "R", "voxel edge in metres")
+      .fallback("0.1")
+      .at_least(0.02)
+      .at_most(1);
+}
+
+Option demo_crop_option() {
+  return Option::number("--crop", "M", "keep the points within M of their camera")
+      .fallback("4")
+      .above(0);
+}
+
 OptionGroup knn_model_group(const std::string& title, const std::string& text) {
   const KnnModelParams p;
   return {title,

@@ -24,6 +24,12 @@ Option threads_option();
 /// --up AXIS; `fallback` says where up comes from without it.
 Option up_option(const std::string& fallback);
 
+/// The demos' --scene (tree, room, loop), --res (0.02 to 1 m, default 0.1) and --crop (default
+/// 4 m, the paper's).
+Option scene_option(const std::string& help);
+Option demo_res_option();
+Option demo_crop_option();
+
 /// The k-NN model's flags (--k --w --p-upper --p-w --p-free --s-limit), defaults from
 /// KnnModelParams.
 OptionGroup knn_model_group(const std::string& title, const std::string& text);

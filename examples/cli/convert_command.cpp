@@ -176,8 +176,7 @@ void write_converted_map(const OccupancyMap<OcKey>& map, const ConvertJob& j, co
     j.out_ext == ".bt" ? io::write_bt(out, map) : io::write_ot(out, map);
     std::printf("wrote %s: the whole map as an OctoMap tree\n", out.c_str());
   } else if (j.out_ext == ".png") {
-    write_map_png(out, map, args.has("--up") ? parse_up_axis(args.str("--up")) : UpAxis{},
-                  std::filesystem::path(j.in).filename().string());
+    write_map_png(out, map, up_axis(args), std::filesystem::path(j.in).filename().string());
     std::printf("wrote %s: a picture of the map\n", out.c_str());
   } else if (j.out_ext == ".voxels" || j.out_ext == ".txt") {
     io::write_voxel_list(out, io::voxel_records(map, all));

@@ -22,6 +22,7 @@
 #include <knnocc/sensor/knn_model.hpp>
 #include <knnocc/sensor/robust_model.hpp>
 #include <knnocc/sim/regimes.hpp>
+#include <knnocc/sim/sensitivity_grid.hpp>
 #include <knnocc/sim/tree_scene.hpp>
 
 #include "args.hpp"
@@ -61,9 +62,7 @@ CommandSpec make_demo_spec() {
   s.text = kDemoText;
   s.groups.push_back(
       {"options",
-       {Option::text("--scene", "NAME", "which demo")
-            .fallback("tree")
-            .one_of({"tree", "room", "loop"}),
+       {scene_option("which demo").fallback("tree"),
         Option::text("--regime", "NAME", "one outlier regime, or all")
             .fallback("all")
             .one_of({"isolated", "clustered", "repeated", "realistic", "all"}),
@@ -71,17 +70,13 @@ CommandSpec make_demo_spec() {
             .fallback("5")
             .at_least(1)
             .at_most(1000),
-        Option::integer("--first-seed", "S", "the first seed")
-            .fallback("1")
+        Option::integer("--first-seed", "S",
+                        "the first seed (the report seeds 101-105 by default: the models' "
+                        "parameters were tuned on seeds 1-5)")
+            .fallback(std::to_string(sim::kReportSeeds[0]))
             .at_least(0)
             .at_most(1e9),
-        Option::number("--res", "R", "voxel edge in metres")
-            .fallback("0.1")
-            .at_least(0.02)
-            .at_most(1),
-        Option::number("--crop", "M", "keep the points within M of their camera")
-            .fallback("4")
-            .above(0),
+        demo_res_option(), demo_crop_option(),
         Option::text("--out", "DIR",
                      "also write, for the first seed: the sequence folder (DIR/scene), the "
                      "reference (DIR/scene/reference.txt) and the three maps (<model> = octomap, "
@@ -346,7 +341,7 @@ int run_demo(const Args& args) {
     regimes = sim::named_regimes();
   } else {
     sim::Regime r;
-    if (!sim::find_regime(which, r)) throw UsageError("--regime: no regime '" + which + "'");
+    sim::find_regime(which, r);  // --regime's declaration admits the named regimes only
     regimes.push_back(r);
   }
 

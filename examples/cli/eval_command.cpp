@@ -313,7 +313,8 @@ int run_eval(const Args& args) {
       "precision %.4f shell_recall %.4f free_inside %zu\n",
       m.occupied, m.free, m.shell, m.in_shell, m.covered, m.irrelevant, m.evaluated, m.precision(),
       m.shell_recall(), m.free_inside);
-  print_confusion(eval::count_confusion(map, eval::ShapeVoxels<OcKey>(ref, map.grid())));
+  print_confusion(
+      eval::count_confusion(map, eval::ShapeVoxels<OcKey>(ref, map.grid(), opt.ground_band)));
   return 0;
 }
 

@@ -29,10 +29,16 @@ namespace knnocc::cli {
 inline std::vector<eval::IdKeyframe> read_id_keyframes(const std::string& path, double crop) {
   const io::Sequence seq = io::Sequence::open(path);
   std::vector<eval::IdKeyframe> out(seq.size());
+  std::vector<std::uint64_t> scratch;
   for (std::size_t i = 0; i < seq.size(); ++i) {
     const io::Cloud cloud = seq.load_cloud(i);
     if (cloud.ids.empty())
       throw io::Error(seq.cloud_path(i), "no map-point ids (an `id` vertex property)");
+    try {  // before any model runs: the models refuse repeated ids too
+      knnocc::detail::check_distinct_ids("keyframe", cloud.ids, scratch);
+    } catch (const std::invalid_argument& e) {
+      throw io::Error(seq.cloud_path(i), e.what());
+    }
     io::keyframe_to_world(seq.pose(i), cloud, crop, out[i].points, out[i].ids);
     const Eigen::Vector3d& t = seq.pose(i).t;
     out[i].origin = {t.x(), t.y(), t.z()};

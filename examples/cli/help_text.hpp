@@ -128,9 +128,9 @@ inline std::string markdown_section(const CommandSpec& spec) {
     out += "| option | default | allowed | meaning |\n| --- | --- | --- | --- |\n";
     for (const Option& o : g.options) {
       std::string def = o.is_required() ? "required" : o.default_shown();
-      out += "| `" + detail::option_words(o) + "` | " + detail::markdown_cell(def) + " | " +
-             detail::markdown_cell(o.range_text()) + " | " + detail::markdown_cell(o.help()) +
-             " |\n";
+      out += "| `" + detail::markdown_cell(detail::option_words(o)) + "` | " +
+             detail::markdown_cell(def) + " | " + detail::markdown_cell(o.range_text()) + " | " +
+             detail::markdown_cell(o.help()) + " |\n";
     }
   }
   if (!spec.footer.empty()) out += "\n```text\n" + spec.footer + "```\n";

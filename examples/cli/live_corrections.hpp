@@ -59,7 +59,7 @@ inline void print_corrections(std::vector<double>& ms, std::size_t reposed) {
 /// `knnocc map` with --corrections; opt: map_command.hpp's MapOptions.
 template <class MapOptions, class Model>
 int run_map_corrections(const Args& args, const MapOptions& opt, const Model& model) {
-  const std::string &input = opt.input, &out_voxels = opt.out_voxels, &which = opt.which;
+  const std::string& input = opt.input;
   const double crop = opt.crop;
   const auto t0 = std::chrono::steady_clock::now();
   const std::string dir = args.str("--corrections");
@@ -105,15 +105,11 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
       throw out_of_memory(i);
     }
   const auto& map = live.map();
+  const std::vector<std::string> written = write_map_outputs(
+      map, args, opt.which, up_axis(args, up_estimate.result()), model_title(model));
   const ScanStats skipped = live.point_counts();  // at the final poses, as plain `map` counts
   note_skipped_points(input, skipped.nonfinite, skipped.out_of_range, map.grid().max_coord());
   note_empty_map(input, source.size(), points, map, model);
-  std::vector<std::string> written;
-  if (!out_voxels.empty()) {
-    io::write_voxel_list(out_voxels, io::voxel_records(map, voxel_selection(which)));
-    written.push_back(out_voxels);
-  }
-  write_map_outputs(map, args, up_axis(args, up_estimate.result()), model_title(model), written);
   if constexpr (LiveMapper<Model>::uses_map_cloud) {
     const auto& tr = live.tracker();
     std::printf("knn k %zu map_points %zu valid %zu mu %.6f sigma %.6f\n", tr.params().k, tr.size(),

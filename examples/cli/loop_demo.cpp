@@ -27,6 +27,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "common_options.hpp"
 #include "live_corrections.hpp"
 #include "map_picture.hpp"
 
@@ -52,7 +53,7 @@ and the time each correction took.
 )";
   s.groups.push_back(
       {"options",
-       {Option::text("--scene", "NAME", "loop for this demo").one_of({"tree", "room", "loop"}),
+       {scene_option("loop for this demo"),
         Option::integer("--seed", "S", "random seed of the scene and the drift")
             .fallback("1")
             .at_least(0),
@@ -60,13 +61,7 @@ and the time each correction took.
             .fallback("0.1")
             .at_least(0)
             .at_most(10),
-        Option::number("--res", "R", "voxel edge in metres")
-            .fallback("0.1")
-            .at_least(0.02)
-            .at_most(1),
-        Option::number("--crop", "M", "keep the points within M of their camera")
-            .fallback("4")
-            .above(0),
+        demo_res_option(), demo_crop_option(),
         Option::text("--out", "DIR", "also write <model>_<map>.png and .bt per map into DIR")},
        ""});
   return s;
@@ -105,15 +100,9 @@ bool run_model(const char* name, const Model& model, const std::vector<sim::SimK
   LiveMapper<Model, OcKey, EigenPose> live(res, model);
   std::vector<Correction> corrections;
   for (std::size_t i = 0; i < kfs.size(); ++i) {
-    std::vector<Point3f> pts;
-    std::vector<std::uint64_t> ids;
-    const io::Cloud& c = kfs[i].cloud;
-    for (std::size_t j = 0; j < c.points.size(); ++j) {
-      const Point3f& p = c.points[j];
-      if (!(std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= crop)) continue;
-      pts.push_back(p);
-      ids.push_back(c.ids[j]);
-    }
+    std::vector<Point3f> pts = kfs[i].cloud.points;
+    std::vector<std::uint64_t> ids = kfs[i].cloud.ids;
+    crop_points(pts, ids, crop);
     if constexpr (!LiveMapper<Model>::uses_map_cloud) ids.clear();
     live.add(i, EigenPose::from(run.tracked[i]), std::move(pts), std::move(ids));
     const auto snap = run.snapshots.find(i);

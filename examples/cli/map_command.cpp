@@ -178,7 +178,7 @@ const CommandSpec& map_spec() {
 namespace {
 
 struct MapOptions {
-  std::string input, which, out_voxels, init_map;
+  std::string input, which, init_map;
   double res = 0, max_range = -1, crop = -1, memory_limit = 0;
   bool discretize = false;
   unsigned threads = 1;
@@ -340,23 +340,6 @@ void report_map(const Mapper<Model>& mapper, const Model& model, const MapOption
               total.points, counts.occupied, counts.free, seconds);
 }
 
-/// --out-voxels and the map files, all written and then all renamed; `note` goes into the
-/// .bt/.ot headers (map_snapshots.hpp).
-template <class Map>
-std::vector<std::string> write_outputs(const Map& map, const Args& args, const MapOptions& opt,
-                                       UpAxis up, const std::string& title,
-                                       const std::string& note) {
-  std::vector<std::string> written;
-  io::CommitGroup outputs;
-  if (!opt.out_voxels.empty()) {
-    io::write_voxel_list(opt.out_voxels, io::voxel_records(map, voxel_selection(opt.which)));
-    written.push_back(opt.out_voxels);
-  }
-  write_map_outputs(map, args, up, title, written, note);
-  outputs.commit();
-  return written;
-}
-
 /// One past the last cloud the run maps (--first, --count); UsageError when --first is past the
 /// input's end.
 std::size_t last_cloud(const MapOptions& opt, const io::ScanSource& source) {
@@ -399,9 +382,9 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
                       out_of_memory_text(opt.memory_limit, "reading or mapping it", budget.res));
     }
   progress.finish();
-  const std::vector<std::string> written =
-      write_outputs(mapper->map(), args, opt, up_axis(args, up_estimate.result()),
-                    model_title(model), opt.save_every ? held_clouds_note(held) : std::string());
+  const std::vector<std::string> written = write_map_outputs(
+      mapper->map(), args, opt.which, up_axis(args, up_estimate.result()), model_title(model),
+      opt.save_every ? held_clouds_note(held) : std::string());
   report_map(*mapper, model, opt, totals, t0);
   print_written(written);
   return 0;
@@ -425,7 +408,6 @@ MapOptions map_options(const Args& args) {
   opt.which = args.str("--voxels");
   opt.discretize = args.flag("--discretize");
   opt.threads = cap_threads("map", args.integer("--threads"));
-  opt.out_voxels = args.str("--out-voxels");
   opt.init_map = args.str("--init-map");
   if (!opt.init_map.empty()) {
     const std::string e = lower_extension(opt.init_map);

@@ -10,8 +10,10 @@
 #include <type_traits>
 #include <vector>
 
+#include <knnocc/io/atomic_file.hpp>
 #include <knnocc/io/octomap_tree.hpp>
 #include <knnocc/io/voxel_export.hpp>
+#include <knnocc/io/voxel_list.hpp>
 #include <knnocc/map/occupancy_map.hpp>
 #include <knnocc/sensor/knn2022_model.hpp>
 #include <knnocc/sensor/knn_model.hpp>
@@ -38,7 +40,6 @@ inline void check_map_outputs(const Args& args) {
   if (args.has("--out-ot") && lower_extension(args.str("--out-ot")) != ".ot")
     throw UsageError("--out-ot needs a file name ending in .ot, got '" + args.str("--out-ot") +
                      "'");
-  if (args.has("--up")) parse_up_axis(args.str("--up"));
   if (args.has("--out-png") && lower_extension(args.str("--out-png")) != ".png")
     throw UsageError("--out-png writes PNG only and needs a file name ending in .png, got '" +
                      args.str("--out-png") + "'");
@@ -101,13 +102,21 @@ inline UpAxis up_axis(const Args& args, UpAxis estimated = {}) {
   return args.has("--up") ? parse_up_axis(args.str("--up")) : estimated;
 }
 
-/// Writes every requested output (each atomically; io::Error names the file on failure) and
-/// adds its name to `written`. `title` names the map in pictures and pages; `note` goes into the
-/// .bt/.ot headers (io::encode_bt).
-inline void write_map_outputs(const OccupancyMap<OcKey>& map, const Args& args, UpAxis up,
-                              const std::string& title, std::vector<std::string>& written,
-                              const std::string& note = {}) {
+/// Writes every requested output of a map: --out-voxels (`which` voxels) and the map files, all
+/// written and then all renamed (io::CommitGroup: a failure leaves every target as it was; an
+/// io::Error names the file). Returns their names. `title` names the map in pictures and pages;
+/// `note` goes into the .bt/.ot headers (map_snapshots.hpp).
+inline std::vector<std::string> write_map_outputs(const OccupancyMap<OcKey>& map, const Args& args,
+                                                  const std::string& which, UpAxis up,
+                                                  const std::string& title,
+                                                  const std::string& note = {}) {
+  std::vector<std::string> written;
+  io::CommitGroup outputs;
   auto done = [&](const char* flag) { written.push_back(args.str(flag)); };
+  if (args.has("--out-voxels")) {
+    io::write_voxel_list(args.str("--out-voxels"), io::voxel_records(map, voxel_selection(which)));
+    done("--out-voxels");
+  }
   if (args.has("--out-bt")) {
     io::write_bt(args.str("--out-bt"), map, note);
     done("--out-bt");
@@ -131,6 +140,8 @@ inline void write_map_outputs(const OccupancyMap<OcKey>& map, const Args& args, 
     write_view_page(args.str("--out-html"), {ViewMap{title, &map}}, up, ViewOptions{});
     done("--out-html");
   }
+  outputs.commit();
+  return written;
 }
 
 }  // namespace knnocc::cli

@@ -9,7 +9,9 @@
 // input and another --first is refused: it would map clouds twice or leave some out.
 
 #include <cstddef>
+#include <filesystem>
 #include <string>
+#include <system_error>
 
 #include <knnocc/io/atomic_file.hpp>
 #include <knnocc/io/error.hpp>
@@ -47,6 +49,14 @@ inline bool parse_held_clouds(const std::string& note, HeldClouds& h) {
   return note.substr(t + tail.size()) == std::to_string(h.end);
 }
 
+/// Whether two paths name the same place ("seq", "./seq", "seq/"): compared resolved.
+inline bool same_path(const std::string& a, const std::string& b) {
+  std::error_code ea, eb;
+  const auto ca = std::filesystem::weakly_canonical(a, ea),
+             cb = std::filesystem::weakly_canonical(b, eb);
+  return ea || eb ? a == b : ca == cb;
+}
+
 /// The first cloud a run's maps hold: `first`, or an --init-map's first when that map holds
 /// clouds of the same input up to `first`. UsageError when it holds clouds of this input but
 /// does not end where --first starts.
@@ -54,7 +64,7 @@ inline std::size_t first_held_cloud(const std::string& init_map, const std::stri
                                     std::size_t first) {
   HeldClouds h;
   if (init_map.empty() || !parse_held_clouds(io::inspect_octree(init_map).note, h) ||
-      h.input != io::printable(input))
+      !same_path(h.input, io::printable(input)))
     return first;
   if (h.end != first)
     throw UsageError("--init-map " + init_map + " holds clouds " + std::to_string(h.first) +

@@ -16,6 +16,7 @@
 
 #include "args.hpp"
 #include "commands.hpp"
+#include "common_options.hpp"
 #include "output_set.hpp"
 
 namespace knnocc::cli {
@@ -103,11 +104,7 @@ CommandSpec make_room_demo_spec() {
       "top view of the map at sensor height.\n";
   s.groups.push_back(
       {"options",
-       {Option::text("--scene", "NAME", "room for this demo").one_of({"tree", "room", "loop"}),
-        Option::number("--res", "R", "voxel edge in metres")
-            .fallback("0.1")
-            .at_least(0.02)
-            .at_most(1),
+       {scene_option("room for this demo"), demo_res_option(),
         Option::integer("--seed", "S", "random seed of the range noise").fallback("1").at_least(0),
         Option::text("--out-voxels", "FILE", "the map as a voxel list (x y z logodds per voxel)")},
        ""});

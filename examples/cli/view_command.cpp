@@ -101,7 +101,7 @@ int run_view(const Args& args) {
   for (const std::string& in : args.positional()) inputs.emplace_back("MAP", in);
   check_outputs({{"--out", out}});
   check_outputs_not_inputs({{"--out", out}}, inputs);
-  const UpAxis up = args.has("--up") ? parse_up_axis(args.str("--up")) : UpAxis{};
+  const UpAxis up = up_axis(args);
   ViewOptions opt;
   opt.max_faces = static_cast<std::size_t>(args.integer("--max-faces"));
   const std::vector<std::string> names = view_names(args);

@@ -1,4 +1,4 @@
-// check_includes: the library's include graph follows its layers (README, "Architecture").
+// check_includes: the library's include graph follows its layers (docs/architecture.md).
 //
 // Every header under include/knnocc belongs to a folder (core, map, raycast, ...; the top-level
 // headers to "top"). A header may include headers of its own folder and of the folders its folder

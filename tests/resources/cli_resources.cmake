@@ -13,7 +13,8 @@ if(TARGET knnocc_tool AND KNNOCC_BASH)
     missing_input velodyne_without_calib utf8_bom_accepted mixed_ids_name_the_file info_like_map
     output_is_input control_bytes_escaped corrections_checked corrections_velodyne_frame
     corrections_key_range_note
-    unmappable_values save_every_resumes stale_temporaries_removed)
+    unmappable_values save_every_resumes stale_temporaries_removed
+    corrections_outputs_all_or_none dangling_link_keeps_user_files heldout_repeated_id)
   foreach(_case IN LISTS KNNOCC_RESOURCE_CASES)
     add_test(NAME cli.resources.${_case}
       COMMAND "${KNNOCC_BASH}" "${CMAKE_CURRENT_LIST_DIR}/cli_resources.sh"

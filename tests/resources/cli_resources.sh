@@ -164,7 +164,7 @@ case "$CASE" in
     [ ! -e c.txt ] || fail "c.txt written"
     no_temporaries ;;
   bad_memory_limit)
-    expect 2 "--memory-limit expects a size of at least 16M such as 800M or 4G, got '5'" \
+    expect 2 "--memory-limit expects a size from 16M to 1000000T such as 800M or 4G, got '5'" \
       "$K" map --input p.xyz --res 0.1 --memory-limit 5 ;;
   missing_input)
     expect 2 "/nonexistent: cannot open: No such file or directory" "$K" map --input /nonexistent --res 0.1 ;;
@@ -196,7 +196,7 @@ case "$CASE" in
     msg="big.bt: the tree's 1073741824 voxels need at least .* more than the map's share .* of --memory-limit 100 MB"
     expect 2 "$msg" "$K" convert big.bt out.ot --memory-limit 100M
     expect 2 "$msg" "$K" view big.bt -o page.html --memory-limit 100M
-    printf 'ground 0\n' > ref.txt
+    printf 'ground 0\nellipsoid 0 0 1 1 1 1\n' > ref.txt
     expect 2 "$msg" "$K" eval --map big.bt --reference ref.txt --memory-limit 100M
     expect 2 "$msg" "$K" map --input p.xyz --init-map big.bt --memory-limit 100M --out-ot x.ot
     [ ! -e out.ot ] && [ ! -e page.html ] && [ ! -e x.ot ] || fail "an output was written"
@@ -355,6 +355,24 @@ case "$CASE" in
     exec 9<&-  # the writer is gone: its temporary is stale
     expect 0 "" "$K" map --input p.xyz --res 0.1 --out-bt a.bt
     no_temporaries ;;
+  corrections_outputs_all_or_none)  # --corrections writes its outputs as one set, like plain map
+    "$K" sim --out s1 --seed 3 --keyframes 12 --drift 0.3 > /dev/null || fail "sim"
+    # --crop 0.001 leaves an empty map, which the page refuses after the other files are written
+    expect 2 "p.html: .*no occupied voxel" "$K" map --input s1 --res 0.1 --corrections s1/corrections --crop 0.001 \
+      --out-voxels v.txt --out-bt m.bt --out-html p.html
+    [ ! -e v.txt ] && [ ! -e m.bt ] && [ ! -e p.html ] || fail "part of the outputs was written"
+    no_temporaries ;;
+  dangling_link_keeps_user_files)  # an output that is a dangling link: no stray file removed
+    printf 'mine' > .tmp-abcdef && touch -d '1 minute ago' .tmp-abcdef
+    ln -s missing/target out.xyz
+    "$K" convert p.xyz out.xyz > /dev/null 2>&1
+    [ "$(cat .tmp-abcdef)" = mine ] || fail "a user's .tmp-abcdef was removed" ;;
+  heldout_repeated_id)  # a map-point id twice in one keyframe: the cloud named, before any model
+    mkdir -p seq/clouds && printf '0 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n' > seq/poses.txt
+    printf 'ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nproperty uint id\nend_header\n1 0 0 7\n1 1 0 8\n' > seq/clouds/000000.ply
+    printf 'ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nproperty uint id\nend_header\n1 0 0 5\n1 1 0 5\n' > seq/clouds/000001.ply
+    expect 2 "seq/clouds/000001.ply: .*map-point id 5 appears twice" "$K" eval --heldout seq --folds 2
+    [ ! -s out.txt ] || fail "a result line before the error" ;;
   *) fail "unknown case $CASE" ;;
 esac
 echo PASS

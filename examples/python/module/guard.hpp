@@ -1,8 +1,8 @@
 #pragma once
-// Guard: the library's thread-safety contract (README "Thread safety") enforced per object. One
-// writer, or any number of readers while no writer runs: a call that would break it is refused
-// with std::runtime_error (RuntimeError in Python) before it starts, never left to race. The
-// module takes a guard while it still holds the GIL, then releases the GIL for the work.
+// Guard: the library's thread-safety contract (docs/library.md, "Thread safety") enforced per
+// object. One writer, or any number of readers while no writer runs: a call that would break it is
+// refused with std::runtime_error (RuntimeError in Python) before it starts, never left to race.
+// The module takes a guard while it still holds the GIL, then releases the GIL for the work.
 
 #include <atomic>
 #include <stdexcept>

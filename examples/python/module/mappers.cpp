@@ -162,7 +162,7 @@ Keyword parameters, by model (defaults in brackets):
                  clamp_max [0.971]: OctoMap's clamping, as probabilities
   'octomap'      prob_hit [0.7], prob_miss [0.4], discretize [False]
   'knn'          k [8], w [0], p_upper [0.9], p_w [0.65], p_free [0.4], s_limit [inf]: the
-                 paper's eq 13-15 (README "The k-NN model and the mapper")
+                 paper's eq 13-15 (docs/library.md, "The k-NN model and the mapper")
   'robust'       the 'knn' parameters and min_views [3] (Mapper only)
 ValueError for an unknown model or parameter, or a value out of range.)";
 

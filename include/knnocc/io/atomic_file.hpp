@@ -61,7 +61,8 @@ inline mode_t new_file_mode() {
 inline int lock_temporary(int fd) noexcept {
 #if KNNOCC_POSIX_FILES
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) return -1;
-  return ::dup(fd);  // shares the lock, which outlives the FILE that closes fd
+  return ::fcntl(fd, F_DUPFD_CLOEXEC, 0);  // shares the lock, which outlives the FILE that
+                                           // closes fd; not inherited by child processes
 #else
   (void)fd;
   return -1;
@@ -264,7 +265,11 @@ inline std::size_t remove_stale_temporaries(const std::string& target) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::path real(target);
-  if (fs::is_symlink(real, ec)) real = fs::canonical(real, ec);  // AtomicFile writes beside it
+  if (fs::is_symlink(real, ec)) {  // AtomicFile writes beside the file the link names
+    const fs::path resolved = fs::canonical(real, ec);
+    if (ec) return 0;  // a dangling link: nothing of ours can lie beside it
+    real = resolved;
+  }
   const fs::path tmpl(detail::temporary_template(real.string()));
   const std::string prefix =
       tmpl.filename().string().substr(0, tmpl.filename().string().size() - 6);

@@ -35,7 +35,7 @@ inline std::size_t printable_utf8_length(const std::string& s, std::size_t i) {
 }  // namespace detail
 
 /// `s` safe to print on a terminal: control characters (NUL, ESC, newline, DEL, C1) and bytes
-/// that are not valid UTF-8 become \xHH; printable ASCII and UTF-8 characters stay. Idempotent
+/// that are not valid UTF-8 become `\xHH`; printable ASCII and UTF-8 characters stay. Idempotent
 /// (a backslash stays a backslash), so text that was made printable once can be passed again.
 inline std::string printable(const std::string& s) {
   static const char kHex[] = "0123456789abcdef";

@@ -60,10 +60,6 @@ class BrickReader {
 };
 
 template <class Key>
-BrickWriter<Key> brick_writer(OccupancyMap<Key>& map) {
-  return BrickWriter<Key>(map);
-}
-template <class Key>
 BrickReader<Key> brick_reader(const OccupancyMap<Key>& map) {
   return BrickReader<Key>(map);
 }

@@ -6,6 +6,8 @@
 // first), how many meet both goals, and the least favourable ones.
 //
 //   build/bin/bench_knn_sweep [--seeds N] [--top N]
+//   build/bin/bench_knn_sweep --model knn2022 [--seeds N]   the 2022 model's sweep
+//   (bench/knn2022_sweep.hpp)
 
 #include <algorithm>
 #include <cstdio>
@@ -21,6 +23,7 @@
 #include <knnocc/sim/tree_scene.hpp>
 
 #include "bench_common.hpp"
+#include "knn2022_sweep.hpp"
 
 using namespace knnocc;
 
@@ -52,11 +55,14 @@ eval::Metrics run(const Scene& s, const Model& model) {
 
 int main(int argc, char** argv) {
   int seeds = 5, top = 25;
+  bool knn2022 = false;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--seeds")) seeds = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--top")) top = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--model")) knn2022 = !std::strcmp(argv[i + 1], "knn2022");
   }
   if (seeds < 1) seeds = 1;
+  if (knn2022) return bench::run_knn2022_sweep(static_cast<std::size_t>(seeds));
   std::printf("bench_knn_sweep (%s build): simulated tree scene, seeds 1..%d, 0.1 m, 4 m crop\n",
               KNNOCC_BENCH_BUILD_TYPE, seeds);
   const double t0 = bench::now();

@@ -8,6 +8,12 @@
 //   octomap*     the oracle: the OctoMap model at the hit/miss/threshold setting with the best F1
 //                on the cell's tuning seeds (the truth picks it), reported on the report seeds
 //   knn          the paper's model, its defaults
+//   knn2022      the authors' 2022 model (sensor/knn2022_model.hpp), its defaults, mu and sigma
+//                from a first pass over the keyframes as the authors did; it gets the whole
+//                clouds (it cuts at its own 4 m inner range), every other model the 4 m crop
+//   knn2022o     the same with running (online) statistics
+//   knn2022c     knn2022 (first pass) given the 4 m crop like the other models: no point lies
+//                beyond its inner range, so its weak outer rays are gone
 //   robust       RobustModel with its defaults, whatever they are at the time
 // Then the goals, the "no cliff" figure (the largest change of a model's irrelevant share between
 // neighbouring cells) and one heat-map PNG per model (bench/heat_map.hpp).
@@ -23,7 +29,9 @@
 
 #include <knnocc/eval/confusion.hpp>
 #include <knnocc/eval/metrics.hpp>
+#include <knnocc/eval/octomap_tuning.hpp>
 #include <knnocc/mapper.hpp>
+#include <knnocc/sensor/knn2022_model.hpp>
 #include <knnocc/sensor/knn_model.hpp>
 #include <knnocc/sensor/robust_model.hpp>
 #include <knnocc/sim/sensitivity_grid.hpp>
@@ -31,6 +39,7 @@
 
 #include "bench_common.hpp"
 #include "heat_map.hpp"
+#include "knn2022_sweep.hpp"
 
 namespace knnocc::bench {
 
@@ -43,23 +52,7 @@ struct GridOptions {
   std::string png_dir = "build/grid";
 };
 
-/// The OctoMap oracle's search grid, like the authors' (hit, miss, occupancy threshold).
-inline const std::vector<double>& tune_hits() {
-  static const std::vector<double> v{0.55, 0.6, 0.7, 0.8, 0.9, 0.97};
-  return v;
-}
-inline const std::vector<double>& tune_misses() {
-  static const std::vector<double> v{0.05, 0.1, 0.2, 0.3, 0.4, 0.45, 0.49};
-  return v;
-}
-inline const std::vector<double>& tune_thresholds() {
-  static const std::vector<double> v{0.5, 0.6, 0.7, 0.8, 0.9};
-  return v;
-}
-
-struct OctoSetting {
-  double hit = 0.7, miss = 0.4, threshold = 0.5;
-};
+using OctoSetting = eval::OctoMapSetting;
 
 struct ModelScore {
   eval::Metrics table1;  ///< sums over the seeds
@@ -81,46 +74,38 @@ inline constexpr double kGridRes = 0.1, kGridCrop = 4.0;
 
 template <class Model>
 void score_model(const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& ref,
-                 const Model& model, double threshold, ModelScore& out) {
+                 const Model& model, double threshold, ModelScore& out, double crop = kGridCrop) {
   MapperOptions mo;
   mo.occupancy.occupancy_threshold = static_cast<float>(logodds(threshold));
   Mapper<Model> mapper(kGridRes, model, mo);
-  sim::map_keyframes(mapper, kfs, kGridCrop);
+  sim::map_keyframes(mapper, kfs, crop);
   const auto& map = mapper.map();
   out.add(eval::evaluate(map, ref),
           eval::count_confusion(map, eval::ShapeVoxels<OcKey>(ref, map.grid())));
 }
 
-// The oracle: the setting with the best F1 of the counts summed over the tuning seeds.
+// The oracle: the setting with the best F1 of the counts summed over the tuning seeds
+// (eval/octomap_tuning.hpp's grid).
 inline OctoSetting tune_octomap(const sim::GridCell& cell, std::size_t seeds) {
-  const auto& hs = tune_hits();
-  const auto& ms = tune_misses();
-  const auto& ts = tune_thresholds();
-  std::vector<eval::ConfusionCounts> sums(hs.size() * ms.size() * ts.size());
-  std::vector<float> thresholds;
-  for (const double t : ts) thresholds.push_back(static_cast<float>(logodds(t)));
+  std::vector<sim::TreeScene> scenes;
+  std::vector<std::vector<sim::SimKeyframe>> kfs;
   for (std::size_t s = 0; s < seeds; ++s) {
-    sim::TreeScene scene(cell.params(sim::kTuningSeeds[s]));
-    const auto kfs = scene.keyframes();
-    for (std::size_t h = 0; h < hs.size(); ++h)
-      for (std::size_t m = 0; m < ms.size(); ++m) {
-        Mapper<OctoMapModel> mapper(kGridRes, OctoMapModel::from_probabilities(hs[h], ms[m]));
-        sim::map_keyframes(mapper, kfs, kGridCrop);
-        const auto counts = eval::count_confusion(
-            mapper.map(), eval::ShapeVoxels<OcKey>(scene.reference(), mapper.map().grid()),
-            thresholds);
-        for (std::size_t t = 0; t < ts.size(); ++t)
-          sums[(h * ms.size() + m) * ts.size() + t] += counts[t];
-      }
+    scenes.emplace_back(cell.params(sim::kTuningSeeds[s]));
+    kfs.push_back(scenes.back().keyframes());
   }
-  std::size_t best = 0;
-  for (std::size_t i = 1; i < sums.size(); ++i)
-    if (sums[i].f1() > sums[best].f1()) best = i;
-  OctoSetting o;
-  o.hit = hs[best / (ms.size() * ts.size())];
-  o.miss = ms[(best / ts.size()) % ms.size()];
-  o.threshold = ts[best % ts.size()];
-  return o;
+  return eval::best_setting(
+      eval::tune_octomap([&](double hit, double miss, const std::vector<float>& thresholds) {
+        std::vector<eval::ConfusionCounts> sum(thresholds.size());
+        for (std::size_t s = 0; s < seeds; ++s) {
+          Mapper<OctoMapModel> mapper(kGridRes, OctoMapModel::from_probabilities(hit, miss));
+          sim::map_keyframes(mapper, kfs[s], kGridCrop);
+          const auto counts = eval::count_confusion(
+              mapper.map(), eval::ShapeVoxels<OcKey>(scenes[s].reference(), mapper.map().grid()),
+              thresholds);
+          for (std::size_t t = 0; t < thresholds.size(); ++t) sum[t] += counts[t];
+        }
+        return sum;
+      }));
 }
 
 inline bool wanted(const std::vector<std::size_t>& subset, std::size_t v) {
@@ -145,7 +130,8 @@ inline int run_grid(const GridOptions& opt) {
       cells.size(), (unsigned long long)sim::kReportSeeds[0],
       (unsigned long long)sim::kReportSeeds[seeds - 1], (unsigned long long)sim::kTuningSeeds[0],
       (unsigned long long)sim::kTuningSeeds[seeds - 1]);
-  const std::vector<std::string> names{"octomap", "octomap*", "knn", "robust"};
+  const std::vector<std::string> names{"octomap",  "octomap*", "knn",   "knn2022",
+                                       "knn2022o", "knn2022c", "robust"};
   const std::size_t nm = names.size();
   std::vector<std::vector<ModelScore>> score(cells.size(), std::vector<ModelScore>(nm));
   std::vector<OctoSetting> tuned(cells.size());
@@ -161,7 +147,12 @@ inline int run_grid(const GridOptions& opt) {
         score_model(kfs, ref, OctoMapModel::from_probabilities(tuned[c].hit, tuned[c].miss),
                     tuned[c].threshold, score[c][1]);
       score_model(kfs, ref, KnnModel{}, 0.5, score[c][2]);
-      score_model(kfs, ref, RobustModel{}, 0.5, score[c][3]);
+      score_model(kfs, ref, Knn2022Model(knn2022_first_pass(kfs, Knn2022Params{})), 0.5,
+                  score[c][3], -1.0);
+      score_model(kfs, ref, Knn2022Model{}, 0.5, score[c][4], -1.0);
+      score_model(kfs, ref, Knn2022Model(knn2022_first_pass(kfs, Knn2022Params{}, kGridCrop)), 0.5,
+                  score[c][5]);
+      score_model(kfs, ref, RobustModel{}, 0.5, score[c][6]);
     }
     std::fprintf(stderr, "\rgrid: cell %zu of %zu (%s), %.0f s", c + 1, cells.size(),
                  cells[c].name().c_str(), now() - t0);

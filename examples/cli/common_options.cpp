@@ -101,6 +101,61 @@ KnnModelParams knn_params(const Args& args) {
   return p;
 }
 
+OptionGroup knn2022_model_group(const std::string& text) {
+  const Knn2022Params p;
+  return {"2022 k-NN model (--model knn2022)",
+          {Option::integer("--k2022", "K", "neighbours of a point within its keyframe")
+               .fallback(std::to_string(p.k))
+               .at_least(1)
+               .at_most(4096),
+           Option::number("--inner-range", "M",
+                          "inner points lie within M of their sensor; the other points' rays are "
+                          "cut there")
+               .fallback(format_number(p.inner_range))
+               .above(0)
+               .below(1e6),
+           Option::number("--p-near", "P", "p_U, probability of a point at d = 0")
+               .fallback(format_number(p.p_near))
+               .above(0)
+               .below(1),
+           Option::number("--p-far", "P", "p_W, the limit of p(d) as d grows (< --p-near)")
+               .fallback(format_number(p.p_far))
+               .above(0)
+               .below(1),
+           Option::number("--p-miss", "P", "free update of rays to inner points")
+               .fallback(format_number(p.p_miss))
+               .above(0)
+               .below(0.5),
+           Option::number("--p-miss-outer", "P",
+                          "free update of the other rays, cut at --inner-range (>= --p-miss)")
+               .fallback(format_number(p.p_miss_outer))
+               .above(0)
+               .below(0.5),
+           Option::text("--stats", "HOW",
+                        "mu and sigma of d: first-pass (over the whole input first, as the "
+                        "authors did) or online (running, Welford)")
+               .fallback("first-pass")
+               .one_of({"first-pass", "online"})},
+          text};
+}
+
+Knn2022Params knn2022_params(const Args& args, bool& first_pass) {
+  Knn2022Params p;
+  p.k = static_cast<std::size_t>(args.integer("--k2022"));
+  p.inner_range = args.number("--inner-range");
+  p.p_near = args.number("--p-near");
+  p.p_far = args.number("--p-far");
+  p.p_miss = args.number("--p-miss");
+  p.p_miss_outer = args.number("--p-miss-outer");
+  first_pass = args.str("--stats") == "first-pass";
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(std::string("2022 k-NN model: ") + e.what());
+  }
+  return p;
+}
+
 OptionGroup map_output_group() {
   return {"map files",
           {Option::text("--output", "FILE",

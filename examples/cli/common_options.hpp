@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include <knnocc/sensor/knn2022_model.hpp>
 #include <knnocc/sensor/knn_model.hpp>
 
 #include "args.hpp"
@@ -35,6 +36,18 @@ OptionGroup knn_model_group(const std::string& title, const std::string& text);
 
 /// The k-NN model's parameters from its flags; UsageError when they do not fit together.
 KnnModelParams knn_params(const Args& args);
+
+/// The 2022 k-NN model's flags (--k2022 --inner-range --p-near --p-far --p-miss --p-miss-outer
+/// --stats), defaults from Knn2022Params (map, eval --heldout).
+OptionGroup knn2022_model_group(const std::string& text);
+
+/// The 2022 model's parameters from its flags (statistics not yet filled in); UsageError when
+/// they do not fit together. `first_pass` says whether --stats asks for the first pass.
+Knn2022Params knn2022_params(const Args& args, bool& first_pass);
+
+/// The flags of knn2022_model_group, for commands that refuse them with another model.
+inline const char* const kKnn2022Flags[] = {"--k2022",  "--inner-range",  "--p-near", "--p-far",
+                                            "--p-miss", "--p-miss-outer", "--stats"};
 
 /// The map files `knnocc map` writes besides --out-voxels (-o, --out-bt ... --no-color), with
 /// --up.

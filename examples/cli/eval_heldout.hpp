@@ -1,6 +1,10 @@
 #pragma once
 // knnocc eval --heldout SEQ: the held-out evaluation (eval/heldout.hpp) of one model or of all,
-// each map built by Mapper as `knnocc map` builds it (the model's defaults).
+// each map built by Mapper as `knnocc map` builds it (the model's defaults; the 2022 model's from
+// its flags). The 2022 model maps the training keyframes uncropped (it cuts at its own inner
+// range, as `knnocc map --model knn2022` without --crop), with mu and sigma from a first pass over
+// the training keyframes (--stats first-pass) or running ones; every map is scored against the
+// same (--crop) held-out keyframes.
 
 #include <cstdio>
 #include <string>
@@ -11,10 +15,12 @@
 #include <knnocc/io/error.hpp>
 #include <knnocc/io/sequence.hpp>
 #include <knnocc/mapper.hpp>
+#include <knnocc/sensor/knn2022_model.hpp>
 #include <knnocc/sensor/knn_model.hpp>
 #include <knnocc/sensor/robust_model.hpp>
 
 #include "args.hpp"
+#include "common_options.hpp"
 
 namespace knnocc::cli {
 
@@ -61,15 +67,46 @@ OccupancyMap<OcKey> map_keyframes(const std::vector<eval::IdKeyframe>& keyframes
   return std::move(mapper.map());
 }
 
+/// The 2022 model's map of keyframes[train]: float world points as `knnocc map` gives them, the
+/// first pass over the same keyframes when `first_pass`.
+inline OccupancyMap<OcKey> map_keyframes_2022(const std::vector<eval::IdKeyframe>& keyframes,
+                                              const std::vector<std::size_t>& train, double res,
+                                              Knn2022Params p, bool first_pass) {
+  std::vector<std::vector<Point3d>> rounded(train.size());
+  Knn2022FirstPass pass(p);
+  for (std::size_t t = 0; t < train.size(); ++t) {
+    for (const Point3d& q : keyframes[train[t]].points) {
+      const Point3f f = knnocc::detail::to_point3f(q);
+      rounded[t].push_back(Point3d{f.x, f.y, f.z});
+    }
+    if (first_pass) pass.add(keyframes[train[t]].origin, rounded[t]);
+  }
+  Mapper<Knn2022Model> mapper(res, Knn2022Model(first_pass ? pass.params() : p));
+  for (std::size_t t = 0; t < train.size(); ++t)
+    mapper.insert_keyframe(keyframes[train[t]].origin, rounded[t]);
+  return std::move(mapper.map());
+}
+
 /// The models `--model` names for the held-out evaluation ("all": every one), calling
-/// f(name, model) for each.
+/// f(name, build) for each, build(train) the map of those keyframes.
 template <class F>
-void for_each_eval_model(const std::string& which, F&& f) {
+void for_each_eval_model(const Args& args, const std::vector<eval::IdKeyframe>& keyframes,
+                         const std::vector<eval::IdKeyframe>& whole, double res, F&& f) {
+  const std::string which = args.str("--model");
+  bool first_pass = true;
+  const Knn2022Params p = knn2022_params(args, first_pass);  // checked before any map is built
   auto run = [&](const char* name, const auto& model) {
-    if (which == "all" || which == name) f(name, model);
+    if (which == "all" || which == name)
+      f(name, [&](const std::vector<std::size_t>& train) {
+        return map_keyframes(keyframes, train, res, model);
+      });
   };
   run("octomap", OctoMapModel{});
   run("knn", KnnModel{});
+  if (which == "all" || which == "knn2022")
+    f("knn2022", [&](const std::vector<std::size_t>& train) {
+      return map_keyframes_2022(whole, train, res, p, first_pass);
+    });
   run("robust", RobustModel{});
 }
 
@@ -86,12 +123,13 @@ inline int run_eval_heldout(const Args& args) {
   if (keyframes.size() < opt.folds)
     throw io::Error(path, std::to_string(keyframes.size()) + " keyframes for " +
                               std::to_string(opt.folds) + " folds");
+  // The 2022 model's training keyframes, uncropped (the same ones without --crop).
+  std::vector<eval::IdKeyframe> whole;
+  if (which == "all" || which == "knn2022")
+    whole = crop > 0 ? read_id_keyframes(path, -1.0) : keyframes;
   eval::HeldoutScore octomap;
-  for_each_eval_model(which, [&](const char* name, const auto& model) {
-    const eval::HeldoutScore s =
-        eval::evaluate_heldout(keyframes, opt, [&](const std::vector<std::size_t>& train) {
-          return map_keyframes(keyframes, train, res, model);
-        });
+  for_each_eval_model(args, keyframes, whole, res, [&](const char* name, const auto& build) {
+    const eval::HeldoutScore s = eval::evaluate_heldout(keyframes, opt, build);
     if (std::string(name) == "octomap") octomap = s;
     std::printf(
         "heldout %-8s folds %zu points %zu recall %.4f rays %zu seen_through %zu occupied %zu "

@@ -12,6 +12,7 @@
 #include <knnocc/io/scan_source.hpp>
 #include <knnocc/io/voxel_list.hpp>
 #include <knnocc/mapper.hpp>
+#include <knnocc/sensor/knn2022_model.hpp>
 #include <knnocc/sensor/knn_model.hpp>
 #include <knnocc/sensor/robust_model.hpp>
 
@@ -80,6 +81,18 @@ const char* kRobustText =
   Rules and measurements: docs/robust_model.md.
 )";
 
+const char* kKnn2022Text =
+    R"(  The authors' 2022 model (Sensors 22(1):139): per cloud, d = mean distance of an inner point
+  (within --inner-range of its sensor) to its --k2022 nearest inner points of the same cloud;
+  p(d) = p_near - (p_near - p_far) F(d), F the normal CDF of d truncated at 0 with mu, sigma of
+  every inner d (--stats); a voxel receives the sum of logit(p(d)) of its inner points (p_far
+  < 0.5: evidence against) and is not freed by the same cloud; rays to inner points free with
+  --p-miss, the other points' rays, cut at --inner-range, with the weaker --p-miss-outer. Give it
+  the whole cloud (no --crop: it cuts at --inner-range itself). Prints one more line:
+    knn2022 k K stats first-pass|online mu X sigma X inner N of P median_keyframe_ms T
+  Defaults: docs/results.md (build/bin/bench_knn_sweep --model knn2022).
+)";
+
 bool nonzero(double v) { return v != 0.0; }
 
 CommandSpec make_map_spec() {
@@ -99,11 +112,11 @@ CommandSpec make_map_spec() {
             .at_least(kMinResolution),
         Option::text("--model", "NAME",
                      "inverse sensor model: octomap (hit 0.7, miss 0.4, clamping 0.1192..0.971, "
-                     "OctoMap's insertPointCloud), knn (the paper's k-NN model, eq 13-15) or "
-                     "robust (see below)")
+                     "OctoMap's insertPointCloud), knn (the paper's k-NN model, eq 13-15), "
+                     "knn2022 (the authors' 2022 model) or robust (see below)")
             .alias("-m")
             .fallback("octomap")
-            .one_of({"octomap", "knn", "robust"}),
+            .one_of({"octomap", "knn", "knn2022", "robust"}),
         Option::number("--max-range", "M",
                        "points farther than M from the sensor only free space up to M and mark "
                        "nothing occupied (OctoMap's maxrange)")
@@ -148,6 +161,7 @@ CommandSpec make_map_spec() {
   s.groups.push_back(map_output_group());
   s.groups.push_back(octomap_model_group());
   s.groups.push_back(knn_model_group("k-NN model (--model knn)", kKnnText));
+  s.groups.push_back(knn2022_model_group(kKnn2022Text));
   s.groups.push_back({"robust model (--model robust)",
                       {Option::integer("--min-views", "N", "keyframes that confirm a map point")
                            .fallback(std::to_string(RobustModelParams{}.min_views))
@@ -256,6 +270,16 @@ struct WorldPoints {
   std::vector<std::uint64_t> ids;
 };
 
+/// A prepared scan's points (MapRun::prepare: sensor frame, cropped) moved to the world frame in
+/// float (as liboctomap), into `out`: the OctoMap and 2022 models' input.
+void float_world(io::Scan& scan, std::vector<Point3f>& out) {
+  std::vector<Point3f>& pts = scan.cloud.points;
+  if (io::is_identity(scan.pose))
+    out.swap(pts);
+  else
+    io::transform_to_world(scan.pose, pts, out);
+}
+
 /// Scan i (MapRun::prepare'd: sensor frame, cropped) into the map: moved to the world frame,
 /// refused when its bricks surely pass the budget; its colours join the run's.
 template <class Model>
@@ -278,11 +302,7 @@ KeyframeStats insert_scan(Mapper<Model>& mapper, io::Scan& scan, std::size_t i,
       throw io::Error(source_path_for_errors(run.input().path, i), e.what());
     }
   } else {
-    std::vector<Point3f>& pts = scan.cloud.points;
-    if (io::is_identity(scan.pose))
-      w.f.swap(pts);
-    else
-      io::transform_to_world(scan.pose, pts, w.f);
+    float_world(scan, w.f);
     if (at_least_bricks(origin, w.f, res, run.input().max_range, true, enough) > enough)
       throw budget.too_big(i, "its rays need more than " + std::to_string(enough) + " bricks (" +
                                   format_bytes(double(enough) * kBrickBytesAtLeast) + ")");
@@ -317,6 +337,14 @@ void report_map(const Mapper<Model>& mapper, const Model& model, const MapOption
         "median_keyframe_ms %.3f\n",
         tr.params().k, tr.size(), tr.N(), tr.mu(), tr.sigma(), totals.rays, totals.rated,
         ms.empty() ? 0.0 : ms[ms.size() / 2]);
+  } else if constexpr (Mapper<Model>::rates_cloud) {
+    const Knn2022Model& m = mapper.model();
+    std::vector<double>& ms = totals.keyframe_ms;
+    std::sort(ms.begin(), ms.end());
+    std::printf(
+        "knn2022 k %zu stats %s mu %.6f sigma %.6f inner %zu of %zu median_keyframe_ms %.3f\n",
+        m.params().k, m.params().fixed_statistics ? "first-pass" : "online", m.mu(), m.sigma(),
+        totals.rated, total.points, ms.empty() ? 0.0 : ms[ms.size() / 2]);
   }
   const auto counts = map.count_voxels();
   const double seconds =
@@ -345,6 +373,15 @@ void print_files(const std::vector<std::string>& written, const std::vector<std:
   print_written(written);
 }
 
+/// One past the last cloud the run maps (--first, --count); UsageError when --first is past the
+/// input's end.
+std::size_t last_cloud(const MapOptions& opt, const io::ScanSource& source) {
+  if (opt.first > source.size() || (opt.first == source.size() && source.size() > 0))
+    throw UsageError("--first " + std::to_string(opt.first) + ": " + opt.input + " has " +
+                     std::to_string(source.size()) + " clouds");
+  return opt.first + std::min(opt.count, source.size() - opt.first);
+}
+
 template <class Model>
 int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -353,10 +390,7 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
                          mapper->map().grid().resolution()};
   mapper->map().set_memory_limit(budget.share);
   const io::ScanSource source = io::ScanSource::open(opt.input);
-  if (opt.first > source.size() || (opt.first == source.size() && source.size() > 0))
-    throw UsageError("--first " + std::to_string(opt.first) + ": " + opt.input + " has " +
-                     std::to_string(source.size()) + " clouds");
-  const std::size_t last = opt.first + std::min(opt.count, source.size() - opt.first);
+  const std::size_t last = last_cloud(opt, source);
   // --save-every: the maps record the clouds they hold (map_snapshots.hpp).
   HeldClouds held{first_held_cloud(opt.init_map, opt.input, opt.first), last, opt.input};
   Progress progress("map", last - opt.first);
@@ -451,15 +485,40 @@ MapOptions map_options(const Args& args) {
   return opt;
 }
 
+/// --stats first-pass: mu and sigma of d over the clouds the run maps, each moved to the world
+/// frame as the mapping pass moves it (the authors' first pass; the input is read twice).
+Knn2022Params knn2022_first_pass(const MapOptions& opt, const Knn2022Params& p) {
+  const io::ScanSource source = io::ScanSource::open(opt.input);
+  const std::size_t last = last_cloud(opt, source);
+  Knn2022FirstPass pass(p);
+  std::vector<Point3f> f;
+  std::vector<Point3d> d;
+  MapRun run(opt.scans, opt.res);
+  const Grid<OcKey> grid(opt.res);
+  for (std::size_t i = opt.first; i < last; ++i) {
+    io::Scan scan = source.load(i);
+    run.prepare(scan, grid, source_path_for_errors(opt.input, i));
+    float_world(scan, f);
+    d.clear();
+    for (const Point3f& q : f) d.push_back(Point3d{q.x, q.y, q.z});
+    pass.add(Point3d{scan.pose.t.x(), scan.pose.t.y(), scan.pose.t.z()}, d);
+  }
+  return pass.params();
+}
+
 /// Flags that belong to another model than --model's.
 void check_model_flags(const Args& args, const std::string& model) {
-  if (model == "octomap")
+  if (model == "octomap" || model == "knn2022")
     for (const char* knn_only : {"--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"})
-      if (args.has(knn_only)) throw UsageError(std::string(knn_only) + " needs --model knn");
+      if (args.has(knn_only))
+        throw UsageError(std::string(knn_only) + " needs --model knn (or robust)");
   if (model != "octomap")
     for (const char* octomap_only : {"--prob-hit", "--prob-miss", "--clamp"})
       if (args.has(octomap_only))
         throw UsageError(std::string(octomap_only) + " needs --model octomap");
+  if (model != "knn2022")
+    for (const char* flag : kKnn2022Flags)
+      if (args.has(flag)) throw UsageError(std::string(flag) + " needs --model knn2022");
   if (model != "robust" && args.has("--min-views"))
     throw UsageError("--min-views needs --model robust");
   if (model != "octomap" && args.flag("--discretize"))
@@ -468,10 +527,11 @@ void check_model_flags(const Args& args, const std::string& model) {
     throw UsageError(
         "--init-map needs --model octomap: a k-NN map cannot be continued from a "
         "file, the tracker's map points and s_p statistics are not in it");
-  if (model == "robust" && args.has("--corrections"))
+  if ((model == "robust" || model == "knn2022") && args.has("--corrections"))
     throw UsageError(
         "--corrections needs --model octomap or knn (the live mapper does not "
-        "take the robust model)");
+        "take the " +
+        model + " model)");
 }
 
 }  // namespace
@@ -490,6 +550,12 @@ int run_map(const Args& args) {
         OctoMapModel::from_probabilities(args.number("--prob-hit"), args.number("--prob-miss"));
     if (args.has("--corrections")) return run_map_corrections(args, opt, om, files);
     return run_map_with(args, opt, om);
+  }
+  if (model == "knn2022") {
+    bool first_pass = true;
+    Knn2022Params p = knn2022_params(args, first_pass);
+    if (first_pass) p = knn2022_first_pass(opt, p);
+    return run_map_with(args, opt, Knn2022Model(p));
   }
   if (model == "robust") {
     RobustModelParams rp;

@@ -24,6 +24,7 @@
 #include <knnocc/io/voxel_list.hpp>
 #include <knnocc/map/occupancy_grid_2d.hpp>
 #include <knnocc/map/occupancy_map.hpp>
+#include <knnocc/sensor/knn2022_model.hpp>
 #include <knnocc/sensor/knn_model.hpp>
 #include <knnocc/sensor/octomap_model.hpp>
 #include <knnocc/sensor/robust_model.hpp>
@@ -158,6 +159,7 @@ inline std::pair<double, double> parse_range(const std::string& flag, const std:
 inline const char* model_title(const OctoMapModel&) { return "OctoMap model"; }
 inline const char* model_title(const KnnModel&) { return "k-NN model"; }
 inline const char* model_title(const RobustModel&) { return "robust model"; }
+inline const char* model_title(const Knn2022Model&) { return "2022 k-NN model"; }
 
 /// The notes (stderr) on points a map holds no update from: NaN/Inf coordinates, points outside
 /// the key range (|c| >= max_coord), e.g. moved there by a correction.

@@ -21,61 +21,9 @@ namespace knnocc::cli {
 
 namespace {
 
-CommandSpec make_sim_spec() {
+// The flags that override the --regime's wrong matches and features.
+void add_regime_groups(CommandSpec& s) {
   const sim::TreeSceneParams p;
-  CommandSpec s;
-  s.name = "sim";
-  s.summary = "write the simulated tree scene as a sequence folder plus its reference shapes";
-  s.usage =
-      "knnocc sim --out DIR [--seed S] [--keyframes N] [--outliers F] [--drift DEG]\n"
-      "                  [--regime NAME] [--cluster N] [--repeat N] [--repeat-prob P] "
-      "[--depth-gain G]";
-  s.text =
-      R"(Simulates the paper's experiment (section 4.1): a stereo camera (f 700 px, baseline 0.12 m,
-disparity noise 0.5 px) circles a potted tree at 3.5 m; foliage = ellipsoid, pot = cuboid, ground
-plane z = 0. Sparse feature points with persistent map-point ids (stereo depth noise growing with
-range), a fraction of wrong stereo matches. Writes
-  DIR/poses.txt, DIR/clouds/NNNNNN.ply   a sequence folder (camera frame, `id` property), for
-                                         `knnocc map --input DIR --crop 4 --res 0.1 ...`
-  DIR/reference.txt                      the true shapes, for `knnocc eval`
-and prints: keyframes N points N outliers N map_points N seen_once F
-(seen_once: fraction of the distinct map points within 4 m that one keyframe alone observes;
-../shared/data/orbslam2_stereo_keyframes: 0.066, see `knnocc eval --ids`)
-DIR must be new or an empty folder: it is written aside (DIR.tmp-XXXXXX) and renamed when
-complete, so a failed run leaves no partial folder. A run whose output would exceed 1 GB is
-refused before any work (with --drift the snapshots grow with the square of --keyframes: 10,000
-keyframes write about 0.9 GB).
-)";
-  s.groups.push_back(
-      {"options",
-       {Option::text("--out", "DIR", "the sequence folder to write").alias("-o").required(),
-        Option::integer("--seed", "S", "random seed; the same scene for a seed with this build")
-            .fallback("1")
-            .at_least(0),
-        Option::integer("--keyframes", "N", "keyframes around the circle")
-            .fallback(std::to_string(p.keyframes))
-            .at_least(1)
-            .at_most(100000),
-        Option::number("--outliers", "F", "fraction of wrong stereo matches per keyframe")
-            .fallback_text("0.08, or the --regime's")
-            .at_least(0)
-            .below(1),
-        Option::number("--drift", "DEG",
-                       "odometry drift: DIR/poses.txt holds tracking estimates whose heading "
-                       "drifts DEG degrees per keyframe (plus jitter); DIR/corrections/"
-                       "after_NNNNNN.txt the SLAM corrections (local bundle adjustment every 10 "
-                       "keyframes, the loop closure after the last: true poses), for `knnocc map "
-                       "--corrections`; DIR/truth/ the same keyframes at their true poses. Prints "
-                       "one more line: drift DEG corrections N max_offset_m X")
-            .fallback_text("no drift")
-            .at_least(0)
-            .at_most(10),
-        Option::text("--regime", "NAME",
-                     "start from a named outlier regime (see `knnocc demo --help`); the flags "
-                     "below override it")
-            .fallback("isolated")
-            .one_of({"isolated", "clustered", "repeated", "realistic"})},
-       ""});
   s.groups.push_back(
       {"wrong matches (override --regime)",
        {Option::integer("--cluster", "N",
@@ -99,6 +47,80 @@ keyframes write about 0.9 GB).
             .at_least(0)
             .at_most(10)},
        ""});
+  s.groups.push_back(
+      {"features (override --regime)",
+       {Option::number("--detect", "P",
+                       "probability that a keyframe observes a feature it sees (the mean over "
+                       "features with --detect-spread)")
+            .fallback_text(format_number(p.detect) + ", or the --regime's")
+            .above(0)
+            .at_most(1),
+        Option::number("--detect-spread", "S",
+                       "each feature its own detection probability: --detect times a log-normal "
+                       "factor of mean 1 and log-sd S (at most 1)")
+            .fallback_text("0, or the --regime's")
+            .at_least(0)
+            .at_most(3)},
+       ""});
+}
+
+CommandSpec make_sim_spec() {
+  const sim::TreeSceneParams p;
+  CommandSpec s;
+  s.name = "sim";
+  s.summary = "write the simulated tree scene as a sequence folder plus its reference shapes";
+  s.usage =
+      "knnocc sim --out DIR [--seed S] [--keyframes N] [--outliers F] [--drift DEG]\n"
+      "                  [--regime NAME] [--cluster N] [--repeat N] [--repeat-prob P] "
+      "[--depth-gain G]\n"
+      "                  [--detect P] [--detect-spread S]";
+  s.text =
+      R"(Simulates the paper's experiment (section 4.1): a stereo camera (f 700 px, baseline 0.12 m,
+disparity noise 0.5 px) circles a potted tree at 3.5 m; foliage = ellipsoid, pot = cuboid, ground
+plane z = 0. Sparse feature points with persistent map-point ids (stereo depth noise growing with
+range), a fraction of wrong stereo matches. Writes
+  DIR/poses.txt, DIR/clouds/NNNNNN.ply   a sequence folder (camera frame, `id` property), for
+                                         `knnocc map --input DIR --crop 4 --res 0.1 ...`
+  DIR/reference.txt                      the true shapes, for `knnocc eval`
+and prints: keyframes N points N outliers N map_points N seen_once F
+(seen_once: fraction of the distinct map points within 4 m that one keyframe alone observes;
+../shared/data/orbslam2_stereo_keyframes: 0.066, see `knnocc eval --ids`)
+DIR must be new or an empty folder: it is written aside (DIR.tmp-XXXXXX) and renamed when
+complete, so a failed run leaves no partial folder. A run whose output would exceed 1 GB is
+refused before any work (with --drift the snapshots grow with the square of --keyframes: 10,000
+keyframes write about 0.9 GB).
+)";
+  s.groups.push_back(
+      {"options",
+       {Option::text("--out", "DIR", "the sequence folder to write").alias("-o").required(),
+        Option::integer("--seed", "S", "random seed; the same scene for a seed with this build")
+            .fallback("1")
+            .at_least(0),
+        Option::integer("--keyframes", "N", "keyframes around the circle")
+            .fallback_text(std::to_string(p.keyframes) + ", or the --regime's")
+            .at_least(1)
+            .at_most(100000),
+        Option::number("--outliers", "F", "fraction of wrong stereo matches per keyframe")
+            .fallback_text("0.08, or the --regime's")
+            .at_least(0)
+            .below(1),
+        Option::number("--drift", "DEG",
+                       "odometry drift: DIR/poses.txt holds tracking estimates whose heading "
+                       "drifts DEG degrees per keyframe (plus jitter); DIR/corrections/"
+                       "after_NNNNNN.txt the SLAM corrections (local bundle adjustment every 10 "
+                       "keyframes, the loop closure after the last: true poses), for `knnocc map "
+                       "--corrections`; DIR/truth/ the same keyframes at their true poses. Prints "
+                       "one more line: drift DEG corrections N max_offset_m X")
+            .fallback_text("no drift")
+            .at_least(0)
+            .at_most(10),
+        Option::text("--regime", "NAME",
+                     "start from a named outlier regime (see `knnocc demo --help`); the flags "
+                     "below override it")
+            .fallback("isolated")
+            .one_of({"isolated", "clustered", "repeated", "realistic"})},
+       ""});
+  add_regime_groups(s);
   return s;
 }
 
@@ -119,7 +141,10 @@ sim::TreeSceneParams sim_params(const Args& args) {
   sim::find_regime(args.str("--regime"), r);
   sim::TreeSceneParams p = r.params;
   p.seed = static_cast<std::uint64_t>(args.integer("--seed"));
-  p.keyframes = static_cast<std::size_t>(args.integer("--keyframes"));
+  p.keyframes =
+      static_cast<std::size_t>(args.integer("--keyframes", static_cast<long>(p.keyframes)));
+  p.detect = args.number("--detect", p.detect);
+  p.detect_spread = args.number("--detect-spread", p.detect_spread);
   p.outliers = args.number("--outliers", p.outliers);
   p.outlier_cluster =
       static_cast<std::size_t>(args.integer("--cluster", static_cast<long>(p.outlier_cluster)));

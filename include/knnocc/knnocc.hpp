@@ -35,13 +35,17 @@
 #include "knn/tracker_concept.hpp"
 #include "knn/tracker_types.hpp"
 
+#include "sensor/cloud_model.hpp"
 #include "sensor/endpoint_rating.hpp"
+#include "sensor/knn2022_model.hpp"
 #include "sensor/knn_model.hpp"
+#include "sensor/layered_rating.hpp"
 #include "sensor/octomap_model.hpp"
 #include "sensor/point_context.hpp"
 #include "sensor/robust_model.hpp"
 #include "sensor/sensor_model.hpp"
 
+#include "insertion/layered_scan_inserter.hpp"
 #include "insertion/map_point_ledger.hpp"
 #include "insertion/scan_inserter.hpp"
 #include "insertion/scan_integrator.hpp"

@@ -10,7 +10,8 @@
 //   Tracker     the map point cloud's k-NN statistics (knn/tracker_concept.hpp), kept only for a
 //               rated model; by default the model's tracker_type (KnnTracker for KnnModel)
 //   Integrator  applies one scan's updates to the map (insertion/scan_integrator.hpp):
-//               ScanInserter (exact DDA, occupied wins, one update per voxel per scan)
+//               ScanInserter (exact DDA, occupied wins, one update per voxel per scan), or
+//               LayeredScanInserter for a cloud-rated model
 //
 // A rated model may ask for each endpoint's context instead of s alone (RobustModel: `rate(const
 // PointContext&, ...)`, sensor/point_context.hpp); only then does Mapper keep, per map-point id,
@@ -32,6 +33,9 @@
 //   rated model (KnnModel):     the change goes through the tracker (Alg. 2), every endpoint is
 //                               rated with its s_{p,t} (eq 13, 14) and the scan applied with
 //                               per-voxel sums (eq 15, Alg. 3).
+//   cloud-rated model (Knn2022Model, sensor/cloud_model.hpp): no map cloud; the model rates the
+//                               keyframe from its own points (rate_cloud) and the keyframe is
+//                               applied with two layers of free space (insert_layered).
 // max_range keeps OctoMap's meaning for both models: a point farther than max_range from the
 // sensor marks nothing occupied, casts its ray truncated at max_range, and (k-NN model) stays out
 // of the map point cloud. Points with a NaN/Inf coordinate or outside the key range are skipped
@@ -53,6 +57,7 @@
 #include "core/key.hpp"
 #include "core/point3.hpp"
 #include "core/point_traits.hpp"
+#include "insertion/layered_scan_inserter.hpp"
 #include "insertion/map_point_ledger.hpp"
 #include "insertion/scan_inserter.hpp"
 #include "insertion/scan_integrator.hpp"
@@ -62,6 +67,7 @@
 #include "map/occupancy_map.hpp"
 #include "raycast/dda.hpp"
 #include "sensor/endpoint_rating.hpp"
+#include "sensor/layered_rating.hpp"
 #include "sensor/octomap_model.hpp"
 #include "sensor/sensor_model.hpp"
 
@@ -120,7 +126,7 @@ EndpointFate endpoint_fate(const Grid<Key>& grid, const Point3f& q, const Point3
 
 template <class Model = OctoMapModel, class Key = OcKey,
           class Tracker = detail::default_tracker_t<Model>,
-          class Integrator = ScanInserter<Key, Model>>
+          class Integrator = detail::default_integrator_t<Key, Model>>
 class Mapper {
  public:
   using model_type = Model;
@@ -131,6 +137,8 @@ class Mapper {
   static constexpr bool uses_map_cloud = detail::uses_map_cloud<Model>::value;
   /// The model rates endpoints from their PointContext (sensor/sensor_model.hpp).
   static constexpr bool rates_context = detail::has_context_rate<Model>::value;
+  /// The model rates each keyframe from its own cloud (sensor/cloud_model.hpp).
+  static constexpr bool rates_cloud = detail::rates_cloud<Model>::value;
 
  private:
   // The concepts of the parts, each failing with a message that names what is missing.
@@ -198,7 +206,10 @@ class Mapper {
   KeyframeStats insert_keyframe(const Origin& origin, const Points& points,
                                 const std::vector<std::uint64_t>& ids = {}) {
     KeyframeStats ks;
-    if constexpr (!uses_map_cloud) {
+    if constexpr (rates_cloud) {
+      (void)ids;
+      insert_rated_cloud(origin, points, ks);
+    } else if constexpr (!uses_map_cloud) {
       (void)ids;
       ks.scan =
           integrator_.insert_point_cloud(origin, points, options_.max_range, options_.discretize);
@@ -263,7 +274,7 @@ class Mapper {
     if (o.max_range == 0.0 || std::isnan(o.max_range))
       detail::invalid_argument("max_range must be > 0, or < 0 for no limit");
     if (o.threads < 1) detail::invalid_argument("threads must be >= 1");
-    if (uses_map_cloud && o.discretize)
+    if ((uses_map_cloud || rates_cloud) && o.discretize)
       detail::invalid_argument("discretize applies to the OctoMap model only");
     return o;
   }
@@ -318,6 +329,19 @@ class Mapper {
            detail::endpoint_fate(map_.grid(), detail::to_point3f(world_[j]),
                                  detail::to_point3f(origin_),
                                  options_.max_range) == detail::EndpointFate::inserted;
+  }
+
+  // A cloud-rated model's keyframe: its ratings from its own points, then the layered scan.
+  template <class Origin, class Points>
+  void insert_rated_cloud(const Origin& origin, const Points& points, KeyframeStats& ks) {
+    if (!load(origin, points, {}, ks)) return;
+    model_.rate_cloud(origin_, world_, layered_);
+    for (const LayeredRating& r : layered_) {
+      ks.rated += r.hit;
+      ks.rays += r.ray == RayLayer::strong;
+    }
+    ks.scan = integrator_.insert_layered(origin_, world_, layered_, model_.ray_layers(),
+                                         options_.max_range);
   }
 
   // Eq 13-15 for the loaded keyframe, then the scan (Alg. 3).
@@ -502,6 +526,7 @@ class Mapper {
   std::vector<Point3d> world_, cloud_;
   std::vector<std::uint64_t> cloud_ids_, cloud_map_ids_, point_ids_, id_scratch_;
   std::vector<EndpointRating> ratings_;
+  std::vector<LayeredRating> layered_;  // cloud-rated model only
   // Contextual model only (rate_in_context).
   bool ids_given_ = false;
   bool without_ids_ = false;  // keyframes without ids kept out of the map cloud (model's choice)

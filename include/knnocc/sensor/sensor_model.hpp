@@ -24,12 +24,15 @@
 //       using tracker_type = ...;    the tracker Mapper keeps by default (knn/tracker_concept.hpp)
 //       TrackerParams tracker_params() const;   optional: how that tracker is constructed
 //     (a Mapper given a constructed tracker needs neither).
+// A third kind rates each keyframe from its own cloud alone, with free space in two layers
+// (Knn2022Model): static constexpr bool rates_cloud = true, see sensor/cloud_model.hpp.
 // examples/custom_policies.cpp writes a rated model of its own.
 
 #include <type_traits>
 #include <utility>
 
 #include "../stats/welford.hpp"
+#include "cloud_model.hpp"
 #include "endpoint_rating.hpp"
 #include "point_context.hpp"
 
@@ -127,7 +130,9 @@ template <class M>
 constexpr bool check_sensor_model() {
   static_assert(has_miss_logodds<M>::value,
                 "a sensor model needs `float miss_logodds() const` (sensor/sensor_model.hpp)");
-  if constexpr (uses_map_cloud<M>::value) {
+  if constexpr (rates_cloud<M>::value) {
+    check_cloud_model<M>();
+  } else if constexpr (uses_map_cloud<M>::value) {
     static_assert(has_rate<M>::value || has_context_rate<M>::value,
                   "a sensor model with uses_map_cloud = true needs `EndpointRating rate(double s, "
                   "const RunningNormal&) const` or `EndpointRating rate(const PointContext&, "

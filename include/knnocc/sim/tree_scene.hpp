@@ -6,12 +6,15 @@
 // ground around them; the same shapes are the evaluation reference (eval/reference.hpp).
 // Features: fixed sites on the surfaces (foliage sites sit up to 5 cm under the ellipsoid: leaves).
 // A keyframe observes each visible site (in the image, facing the camera, not occluded) with
-// probability `detect`. The first observation of a site creates its map point: the site moved by
-// stereo depth noise along the viewing ray, sigma_z = z^2 sigma_d / (f b), and `lateral_noise`
-// across it; later keyframes observe that same position under the same id (as ORB-SLAM map
-// points). A fraction `outliers` of each keyframe's observations are wrong stereo matches: new
-// map points at depth z * U(0.5, 1.6) on the viewing ray. With the defaults they are isolated and
-// seen by that keyframe only (the paper-like regime); the realistic SLAM outliers are parameters:
+// probability `detect` (with detect_spread > 0 each site its own: detect times a log-normal factor
+// of mean 1 and log-sd detect_spread, at most 1; features differ in strength, so some are found
+// by most keyframes that see them and many by few). The first observation of a site creates its map
+// point: the site moved by stereo depth noise along the viewing ray, sigma_z = z^2 sigma_d / (f b),
+// and `lateral_noise` across it; later keyframes observe that same position under the same id (as
+// ORB-SLAM map points). A fraction `outliers` of each keyframe's observations are wrong stereo
+// matches: new map points at depth z * U(0.5, 1.6) on the viewing ray. With the defaults they are
+// isolated and seen by that keyframe only (the paper-like regime); the realistic SLAM outliers are
+// parameters:
 //   outlier_cluster   a wrong match is a patch of that many neighbouring features sharing one
 //                     disparity error (a small wrong surface, as on repetitive texture): the
 //                     points around the site within cluster_radius across the ray, all at the
@@ -66,6 +69,7 @@ struct TreeSceneParams {
   double disparity_noise = 0.5;  ///< sigma_d (px)
   double lateral_noise = 0.01;   ///< across the viewing ray (m)
   double detect = 0.3;           ///< probability that a visible site is observed by a keyframe
+  double detect_spread = 0.0;    ///< log-sd of the sites' own detection probabilities (0: equal)
   double outliers = 0.08;        ///< fraction of wrong stereo matches per keyframe
   double foliage_density = 150;  ///< feature sites per m^2
   double pot_density = 100;
@@ -84,6 +88,8 @@ struct TreeSceneParams {
     if (!(radius > 1.5 && radius < 100))
       knnocc::detail::invalid_argument("radius must be in (1.5, 100) m");
     if (!(detect > 0 && detect <= 1)) knnocc::detail::invalid_argument("detect must be in (0, 1]");
+    if (!(detect_spread >= 0 && detect_spread <= 3))
+      knnocc::detail::invalid_argument("detect_spread must be in [0, 3]");
     if (!(outliers >= 0 && outliers < 1))
       knnocc::detail::invalid_argument("outliers must be in [0, 1)");
     if (!(disparity_noise >= 0 && lateral_noise >= 0 && disparity_noise < 100 &&
@@ -218,6 +224,14 @@ class TreeScene {
       sites_.push_back({p, Eigen::Vector3d::UnitZ()});
     }
     map_points_.assign(sites_.size(), Eigen::Vector3d::Constant(std::nan("")));
+    // Each site's detection probability (drawn only with a spread: the random sequence of the
+    // default scene stays as it was).
+    detect_.assign(sites_.size(), p_.detect);
+    if (p_.detect_spread > 0)
+      for (double& d : detect_) {
+        const double s = p_.detect_spread;
+        d = std::min(1.0, p_.detect * std::exp(s * normal() - 0.5 * s * s));
+      }
   }
 
   // Does the segment from o to just before p cross a solid?
@@ -278,7 +292,7 @@ class TreeScene {
       const double u = p_.focal * pc.x() / pc.z() + cx, v = p_.focal * pc.y() / pc.z() + cy;
       if (u < 0 || u >= p_.width || v < 0 || v >= p_.height_px) continue;
       if (site.n.dot(o - site.p) <= 0) continue;  // seen from behind
-      if (uniform() >= p_.detect) continue;
+      if (uniform() >= detect_[s]) continue;
       if (occluded(o, site.p)) continue;
       Eigen::Vector3d& mp = map_points_[s];
       if (std::isnan(mp.x())) {  // first observation: triangulate once
@@ -379,6 +393,7 @@ class TreeScene {
   eval::Reference ref_;
   std::vector<Site> sites_;
   std::vector<Eigen::Vector3d> map_points_;  // NaN until first observed
+  std::vector<double> detect_;               // per site: its detection probability
   std::vector<Patch> patches_;               // wrong patches still re-observable
   std::uint64_t next_outlier_ = 0;
   std::size_t count_ = 0;  // keyframes made so far

@@ -137,8 +137,8 @@ void simulator(int seeds, const RobustModelParams& params, const char* label) {
       });
       irrel += irr.size();
       std::unordered_set<OcKey, KeyHash> irr_wrong;
-      std::vector<std::pair<std::uint64_t, const MapPointLedger<OcKey>::Point*>> committed;
-      mapper.map_points().for_each([&](std::uint64_t id, const auto& e) {
+      std::vector<std::pair<std::uint64_t, const MapPointLedger::Point*>> committed;
+      mapper.model().map_points().for_each([&](std::uint64_t id, const auto& e) {
         if (e.added != 0.0f && !e.rejected) committed.push_back({id, &e});
       });
       for (const auto& [id, e] : committed) {
@@ -152,8 +152,8 @@ void simulator(int seeds, const RobustModelParams& params, const char* label) {
         }
         ++wrong_commit;
         consec += t.span(t.kf.size()) <= 4;
-        if (irr.count(e->key)) {
-          irr_wrong.insert(e->key);
+        if (irr.count(OcKey::unpack(e->key))) {
+          irr_wrong.insert(OcKey::unpack(e->key));
           wrong_irrel.add(t);
           ++wrong_pts;
           // its supporters within the support radius created by another keyframe
@@ -246,7 +246,7 @@ void real_set(const std::string& dir) {
     const auto* vec = &in_voxel[k];
     if (!isolated(rm, k)) {
       for (auto id : *vec) {
-        const auto* e = rob.map_points().find(id);
+        const auto* e = rob.model().map_points().find(id);
         if (e && e->added != 0.0f) ok_pts.add(tracks.at(id));
       }
       return;
@@ -264,7 +264,7 @@ void real_set(const std::string& dir) {
         }
     iso_nbr_lost += nl;
     for (auto id : *vec) {
-      const auto* e = rob.map_points().find(id);
+      const auto* e = rob.model().map_points().find(id);
       if (e && e->added != 0.0f) iso_pts.add(tracks.at(id));
     }
   });
@@ -285,7 +285,7 @@ void real_set(const std::string& dir) {
     const auto lv = rm.logodds(k);
     std::printf("    voxel log-odds %6.2f:", lv ? double(*lv) : std::nan(""));
     for (auto id : in_voxel[k]) {
-      const auto* e = rob.map_points().find(id);
+      const auto* e = rob.model().map_points().find(id);
       const Track& t = tracks.at(id);
       if (t.views() >= 3) lost_pts.add(t);
       any_commit |= e && e->added != 0.0f;

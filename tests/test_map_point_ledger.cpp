@@ -1,4 +1,4 @@
-// insertion/map_point_ledger.hpp: views per keyframe, parallax, and contradictions against a
+// sensor/map_point_ledger.hpp: views per keyframe, parallax, and contradictions against a
 // brute-force test of every ray against every point.
 
 #include <doctest/doctest.h>
@@ -7,13 +7,13 @@
 #include <random>
 #include <vector>
 
-#include <knnocc/insertion/map_point_ledger.hpp>
+#include <knnocc/sensor/map_point_ledger.hpp>
 
 using namespace knnocc;
 
 TEST_CASE("ledger: views once per keyframe, first position and direction kept, parallax") {
   OccupancyMap<OcKey> map(0.1);
-  MapPointLedger<OcKey> l;
+  MapPointLedger l;
   const Point3d o{0, 0, 0};
   l.observe(5, {1, 0, 0}, o, 0, map.grid());
   l.observe(5, {1, 0, 0}, o, 0, map.grid());
@@ -22,15 +22,14 @@ TEST_CASE("ledger: views once per keyframe, first position and direction kept, p
   CHECK(e.first == 0);  // its creator
   CHECK(e.last == 1);
   CHECK(e.position.x == 1.0);
-  CHECK(MapPointLedger<OcKey>::parallax(e, {1, 0, 0}, Point3d{1, -1, 0}) ==
-        doctest::Approx(M_PI / 2));
+  CHECK(MapPointLedger::parallax(e, {1, 0, 0}, Point3d{1, -1, 0}) == doctest::Approx(M_PI / 2));
 }
 
 TEST_CASE("ledger: contradictions equal a brute-force count; rejected evidence taken back") {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-2.0, 2.0);
   OccupancyMap<OcKey> map(0.1);
-  MapPointLedger<OcKey> l;
+  MapPointLedger l;
   std::vector<Point3d> pts;
   for (std::uint64_t id = 0; id < 300; ++id) {
     pts.push_back({u(rng), u(rng), u(rng) * 0.2});

@@ -239,15 +239,15 @@ TEST_CASE("robust model in a Mapper: deferral, confirmation, views per map point
   m.insert_keyframe(origin, pts, ids);
   CHECK_FALSE(m.map().logodds(k).has_value());        // deferred: its voxel untouched
   CHECK_FALSE(m.map().logodds(crossed).has_value());  // no ray yet
-  CHECK(m.map_points().find(42)->views == 2);
+  CHECK(m.model().map_points().find(42)->views == 2);
   KeyframeStats ks = m.insert_keyframe(origin, pts, ids);
   CHECK(ks.rays == 0);  // rays from ray_views (4) views on
   // One point: no s (fewer than k neighbours), rated at the floor P_w, three times at once.
   REQUIRE(m.map().logodds(k).has_value());
   CHECK(*m.map().logodds(k) == doctest::Approx(3 * logodds(0.65)).epsilon(1e-5));
   CHECK_FALSE(m.map().logodds(crossed).has_value());
-  CHECK(m.map_points().find(42)->views == 3);
-  CHECK(m.map_points().find(42)->added == doctest::Approx(3 * logodds(0.65)).epsilon(1e-5));
+  CHECK(m.model().map_points().find(42)->views == 3);
+  CHECK(m.model().map_points().find(42)->added == doctest::Approx(3 * logodds(0.65)).epsilon(1e-5));
   ks = m.insert_keyframe(origin, pts, ids);
   CHECK(ks.rays == 1);
   CHECK(*m.map().logodds(crossed) == doctest::Approx(logodds(0.4)));
@@ -267,7 +267,7 @@ TEST_CASE("robust model in a Mapper: the keyframe span since a point's creator")
   for (int kf = 0; kf < 3; ++kf) m.insert_keyframe(origin, pts, ids);  // keyframes 0, 1, 2
   m.insert_keyframe(origin, other, other_ids);                         // 3
   m.insert_keyframe(origin, pts, ids);                                 // 4: span 4
-  CHECK(m.map_points().find(42)->views == 4);
+  CHECK(m.model().map_points().find(42)->views == 4);
   CHECK_FALSE(m.map().logodds(k).has_value());  // confirmed, but only 4 keyframes after its creator
   m.insert_keyframe(origin, pts, ids);          // 5: span 5, all five views at once (floor P_w)
   REQUIRE(m.map().logodds(k).has_value());
@@ -289,7 +289,7 @@ TEST_CASE("robust model in a Mapper: rays of other keyframes through a point tak
   const std::vector<Point3d> behind{{2.05, 2.0, 0.05}};
   // (no ray before point 8 has ray_views (4) views: the 4th and 5th keyframes contradict 7)
   for (int i = 0; i < 5; ++i) m.insert_keyframe(side, behind, {8});
-  const auto* p = m.map_points().find(7);
+  const auto* p = m.model().map_points().find(7);
   REQUIRE(p != nullptr);
   CHECK(p->contra >= 2);
   CHECK(p->rejected);
@@ -365,7 +365,7 @@ TEST_CASE("robust model in a Mapper: independent support against a brute-force c
     const std::vector<bool> anchors_before = anchor;
     std::vector<bool> expect = committed;
     for (const std::uint64_t id : ids) {
-      const auto* e = m.map_points().find(id);
+      const auto* e = m.model().map_points().find(id);
       REQUIRE(e != nullptr);
       if (anchor[id]) continue;
       std::uint32_t support = 0, siblings = 0;
@@ -399,13 +399,13 @@ TEST_CASE("robust model in a Mapper: independent support against a brute-force c
     // points held back beside this keyframe's new anchors commit at its end
     if (params.near_views > 0)
       for (std::size_t o = 0; o < pos.size(); ++o)
-        if (!expect[o] && m.map_points().find(o)->views >= params.near_views &&
+        if (!expect[o] && m.model().map_points().find(o)->views >= params.near_views &&
             anchor_beside(key[o], anchor)) {
           expect[o] = true;
           ++near_later;
         }
     for (std::size_t o = 0; o < pos.size(); ++o) {
-      const auto* e = m.map_points().find(o);
+      const auto* e = m.model().map_points().find(o);
       REQUIRE(e != nullptr);
       CHECK(e->anchor == anchor[o]);
       CHECK((e->added != 0.0f) == expect[o]);
@@ -463,7 +463,7 @@ TEST_CASE("robust model without map-point ids keeps no map point cloud") {
   CHECK(ks.rays == pts.size());
   CHECK(ks.tracker.added == 0);
   CHECK(robust.tracker().size() == 0);  // the model rates them without it
-  CHECK(robust.map_points().size() == 0);
+  CHECK(robust.model().map_points().size() == 0);
   CHECK(robust.map().count_voxels().occupied > 100);
   // a sequence either always or never gives ids, both ways round
   CHECK_THROWS_AS(robust.insert_keyframe(Point3d{0, 0, 0}, pts, ids), std::invalid_argument);

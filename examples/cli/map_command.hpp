@@ -5,7 +5,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -151,8 +150,8 @@ template <class Model>
 int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   const auto t0 = std::chrono::steady_clock::now();
   const MapperOptions mo{opt.max_range, opt.discretize, opt.threads, {}};
-  std::unique_ptr<Mapper<Model>> owned;
-  if (!opt.init_map.empty()) {
+  Mapper<Model> mapper = [&] {
+    if (opt.init_map.empty()) return Mapper<Model>(opt.res, model, mo);
     OccupancyMap<OcKey> init = io::read_octree(opt.init_map);
     if (opt.res > 0 && std::abs(init.grid().resolution() - opt.res) > 1e-12 * opt.res)
       throw io::Error(opt.init_map, "resolution " + std::to_string(init.grid().resolution()) +
@@ -162,11 +161,8 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
                    "knnocc map: %s: a .bt holds only occupied/free; continuing from clamped "
                    "log-odds (a .ot continues exactly)\n",
                    opt.init_map.c_str());
-    owned = std::make_unique<Mapper<Model>>(std::move(init), model, mo);
-  } else {
-    owned = std::make_unique<Mapper<Model>>(opt.res, model, mo);
-  }
-  Mapper<Model>& mapper = *owned;
+    return Mapper<Model>(std::move(init), model, mo);
+  }();
   UpEstimator up_estimate;
   std::vector<std::string> written;
   const std::size_t map_share = map_memory_share(opt.memory_limit);
@@ -281,7 +277,7 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   if constexpr (Mapper<Model>::uses_map_cloud) {
     const auto& tr = mapper.tracker();
     // Dense input (depth camera, LiDAR): the paper's s-rating removes far, sparser surfaces.
-    if constexpr (!Mapper<Model>::rates_context)
+    if constexpr (!Mapper<Model>::contextual)
       if (clouds > 0 && tr.N() > 0 && (tr.mu() < 0.5 * opt.res || total.points / clouds > 20000))
         std::fprintf(stderr,
                      "knnocc map: %s: warning: dense input (mean k-NN distance %.3g m at --res %g, "

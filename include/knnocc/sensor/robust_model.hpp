@@ -65,20 +65,27 @@
 //     map point cloud, so its tracker() stays empty (map_cloud_without_ids).
 // Each part can be switched off in RobustModelParams to measure it (bench/bench_robust_model.cpp).
 //
-// Thread safety: immutable after construction; share it freely.
+// Thread safety: its ledger is written by its Mapper's insert (one writer).
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <unordered_map>
+#include <vector>
 
 #include "../core/config.hpp"
+#include "../core/key.hpp"
 #include "../core/log_odds.hpp"
+#include "../knn/change_set.hpp"
 #include "../knn/tracker.hpp"
+#include "../map/occupancy_map.hpp"
 #include "../stats/welford.hpp"
+#include "contextual_model.hpp"
 #include "endpoint_rating.hpp"
 #include "knn_model.hpp"
+#include "map_point_ledger.hpp"
 #include "point_context.hpp"
 
 namespace knnocc {
@@ -254,12 +261,147 @@ class RobustModel {
   }
   double contradiction_margin() const { return params_.contra_margin; }
 
+  /// What the model remembers per map-point id (views, evidence added, anchors, contradictions).
+  const MapPointLedger& map_points() const { return ledger_; }
+
+  /// The contextual hook (sensor/contextual_model.hpp): each endpoint's PointContext (its map
+  /// point's views, first viewing direction and contradictions, its voxel's endpoints in this
+  /// keyframe and log-odds so far), then rate() above.
+  template <class Key, class Tracker>
+  void rate_keyframe(const KeyframeView<Key, Tracker>& kf, std::vector<EndpointRating>& ratings) {
+    const std::size_t n = kf.points.size();
+    keys_.resize(n);
+    key_ok_.assign(n, 0);
+    beside_.assign(n, 0);
+    per_voxel_.clear();
+    for (std::size_t j = 0; j < n; ++j) {
+      Key k;
+      if (kf.ids[j] != KeyframeUnion::kNoId &&
+          kf.map.grid().point_to_key(detail::to_point3f(kf.points[j]), k)) {
+        keys_[j] = k.pack();
+        key_ok_[j] = 1;
+        ++per_voxel_[keys_[j]];
+      }
+    }
+    const RunningNormal& dist = kf.tracker.distribution();
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::uint64_t id = kf.ids[j];
+      if (id == KeyframeUnion::kNoId) continue;  // rated by Mapper: truncated ray only
+      PointContext c;
+      c.s = kf.tracker.contains(id) ? kf.tracker.s(id) : std::numeric_limits<double>::quiet_NaN();
+      const Point3d& p = kf.points[j];
+      const double dx = p.x - kf.origin.x, dy = p.y - kf.origin.y, dz = p.z - kf.origin.z;
+      c.range = std::sqrt(dx * dx + dy * dy + dz * dz);
+      c.keyframe = kf.index;
+      if (key_ok_[j]) {
+        c.in_voxel = per_voxel_[keys_[j]];
+        if (const auto v = kf.map.logodds(Key::unpack(keys_[j]))) c.voxel_logodds = *v;
+      }
+      if (kf.has_ids) {
+        const auto& e = ledger_.observe(id, p, kf.origin, kf.index, kf.map.grid());
+        c.views = e.views;
+        c.contradictions = e.contra;
+        c.committed = e.added != 0.0f;
+        c.anchor = e.anchor;
+        c.parallax = MapPointLedger::parallax(e, p, kf.origin);
+        c.span = kf.index - e.first;
+        // Counted until the point commits on its own: the support decision is taken once.
+        const double r = c.anchor ? 0.0 : support_radius(c.views, dist);
+        if (r > 0) c.support = count_support(kf.tracker, id, e.first, r, c.siblings);
+        if (key_ok_[j] && wants_anchors(c)) {
+          c.anchors = ledger_.anchors_around(Key::unpack(keys_[j]));
+          beside_[j] = 1;
+        }
+      }
+      ratings[j] = rate(c, dist);
+    }
+  }
+
+  /// After the scan: the evidence each map point added, the points held back beside this
+  /// keyframe's new anchors, then the free-space evidence of this keyframe's rays against other
+  /// map points (MapPointLedger::contradict).
+  template <class Key, class Tracker>
+  void settle_keyframe(const KeyframeView<Key, Tracker>& kf,
+                       const std::vector<EndpointRating>& ratings, OccupancyMap<Key>& map) {
+    if (!kf.has_ids) return;
+    new_anchors_.clear();
+    for (std::size_t j = 0; j < kf.points.size(); ++j) {
+      if (kf.ids[j] == KeyframeUnion::kNoId || ratings[j].logodds == 0.0f) continue;
+      if (auto* e = ledger_.find(kf.ids[j])) {
+        e->added += ratings[j].logodds;
+        if (!e->anchor && !beside_[j]) {  // committed beside anchors: not one itself
+          e->anchor = true;
+          if (e->has_key) new_anchors_.push_back(e->key);
+        }
+      }
+    }
+    commit_beside<Key>(kf, map);
+    if (contradiction_radius() > 0)
+      ledger_.contradict(
+          kf.origin, kf.points, ratings, kf.index, contradiction_radius(), contradiction_margin(),
+          map, [&](std::uint32_t views, std::uint32_t contra) { return rejects(views, contra); });
+  }
+
  private:
+  // Map points within r of map point `id` (the tracker's cloud) that a keyframe other than
+  // `first` created (PointContext::support); `siblings`: the other map points within r that
+  // `first` created (PointContext::siblings).
+  template <class Tracker>
+  std::uint32_t count_support(const Tracker& tracker, std::uint64_t id, std::size_t first, double r,
+                              std::uint32_t& siblings) {
+    siblings = 0;
+    if (!tracker.contains(id)) return 0;
+    tracker.radius(tracker.position(id), r * r, near_);
+    std::uint32_t n = 0;
+    for (const auto i : near_) {
+      const std::uint64_t other = tracker.id_at(i);
+      if (other == id) continue;
+      const auto* e = ledger_.find(other);
+      const bool independent = e == nullptr || e->first != first;
+      n += independent;
+      siblings += !independent;
+    }
+    return n;
+  }
+
+  // Map points held back before an anchor appeared beside them now add, to the voxel of their
+  // first position, what they add beside anchors (near_views): the evidence does not depend on
+  // whether the anchor or the point came first.
+  template <class Key, class Tracker>
+  void commit_beside(const KeyframeView<Key, Tracker>& kf, OccupancyMap<Key>& map) {
+    const RunningNormal& dist = kf.tracker.distribution();
+    for (const std::uint64_t a : new_anchors_)
+      ledger_.for_each_around(Key::unpack(a), [&](std::uint64_t id, auto& p) {
+        if (p.added != 0.0f || p.anchor || p.rejected || !p.has_key) return;
+        PointContext c;
+        c.s = kf.tracker.contains(id) ? kf.tracker.s(id) : std::numeric_limits<double>::quiet_NaN();
+        c.views = p.views;
+        c.span = kf.index - p.first;
+        c.keyframe = kf.index;
+        c.contradictions = p.contra;
+        const Key k = Key::unpack(p.key);
+        if (const auto v = map.logodds(k)) c.voxel_logodds = *v;
+        c.anchors = 1;
+        const float l = beside_evidence(c, dist);
+        if (l == 0.0f) return;
+        map.update(k, l);
+        p.added = l;
+      });
+  }
+
   RobustModelParams params_;
   KnnModel knn_;
   float hit_ = 0.0f;
   double floor_ = 0.0;
   std::uint32_t ray_views_ = 1;
+  MapPointLedger ledger_;
+  // Per keyframe (kept for their memory).
+  std::vector<std::uint64_t> keys_;  // each endpoint's voxel (Key::pack())
+  std::vector<unsigned char> key_ok_;
+  std::vector<unsigned char> beside_;  // rated from the anchors around it (wants_anchors)
+  std::vector<std::uint64_t> new_anchors_;
+  std::vector<std::uint32_t> near_;
+  std::unordered_map<std::uint64_t, std::uint32_t> per_voxel_;
 };
 
 }  // namespace knnocc

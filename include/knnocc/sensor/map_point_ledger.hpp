@@ -1,6 +1,6 @@
 #pragma once
-// MapPointLedger: what Mapper remembers per map-point id for a contextual sensor model
-// (sensor/sensor_model.hpp, RobustModel): how many keyframes observed the point, its first
+// MapPointLedger: what RobustModel (sensor/robust_model.hpp) remembers per map-point id: how many
+// keyframes observed the point, its first
 // viewing direction, the occupied log-odds it has added to its voxel, whether it committed by the
 // model's own rules (an anchor: anchors_around), and how many other keyframes' rays contradict it
 // (free-space evidence against the point).
@@ -14,7 +14,9 @@
 // Storage: points in one vector, found by id and by voxel through open-addressing tables
 // (core/detail/flat_index.hpp): the contradiction test looks up every voxel every ray crosses.
 //
-// Thread safety: one writer (its Mapper).
+// Voxels are kept as packed keys (Key::pack()), so one ledger serves every key type.
+//
+// Thread safety: one writer (its model).
 
 #include <cmath>
 #include <cstddef>
@@ -26,16 +28,15 @@
 #include "../core/point3.hpp"
 #include "../map/occupancy_map.hpp"
 #include "../raycast/dda.hpp"
-#include "../sensor/endpoint_rating.hpp"
+#include "endpoint_rating.hpp"
 
 namespace knnocc {
 
-template <class Key>
 class MapPointLedger {
  public:
   struct Point {
     Point3d position;             ///< world position at the first observation
-    Key key;                      ///< its voxel
+    std::uint64_t key = 0;        ///< its voxel (Key::pack())
     bool has_key = false;         ///< inside the key range
     std::uint32_t views = 0;      ///< keyframes that observed it
     std::uint32_t contra = 0;     ///< keyframes whose rays contradict it
@@ -50,6 +51,7 @@ class MapPointLedger {
 
   /// The point `id` observed by `keyframe` at `p` from `origin` (its first position is kept);
   /// returns it with views counted once per keyframe.
+  template <class Key>
   Point& observe(std::uint64_t id, const Point3d& p, const Point3d& origin, std::size_t keyframe,
                  const Grid<Key>& grid) {
     bool fresh = false;
@@ -70,11 +72,13 @@ class MapPointLedger {
         e.dir[1] = static_cast<float>(dy / r);
         e.dir[2] = static_cast<float>(dz / r);
       }
-      e.has_key = grid.point_to_key(p, e.key);
+      Key k;
+      e.has_key = grid.point_to_key(p, k);
       if (e.has_key) {
+        e.key = k.pack();
         bool new_cell = false;
-        const std::uint32_t c = cells_.find_or_insert(
-            e.key.pack(), static_cast<std::uint32_t>(cell_points_.size()), new_cell);
+        const std::uint32_t c =
+            cells_.find_or_insert(e.key, static_cast<std::uint32_t>(cell_points_.size()), new_cell);
         if (new_cell) cell_points_.emplace_back();
         cell_points_[c].push_back(i);
       }
@@ -99,7 +103,7 @@ class MapPointLedger {
   /// with ratings[j].casts_ray) bring, then calls rejects(views, contradictions) for each point
   /// they touched and takes back the evidence of the newly rejected ones from `map`. Returns the
   /// number of points rejected.
-  template <class Rejects>
+  template <class Key, class Rejects>
   std::size_t contradict(const Point3d& origin, const std::vector<Point3d>& world,
                          const std::vector<EndpointRating>& ratings, std::size_t keyframe,
                          double radius, double margin, OccupancyMap<Key>& map, Rejects&& rejects) {
@@ -139,7 +143,7 @@ class MapPointLedger {
       if (p.rejected || !rejects(p.views, p.contra)) continue;
       p.rejected = true;
       ++rejected;
-      if (p.has_key && p.added != 0.0f) map.update(p.key, -p.added);
+      if (p.has_key && p.added != 0.0f) map.update(Key::unpack(p.key), -p.added);
       p.added = 0.0f;
     }
     return rejected;
@@ -147,7 +151,7 @@ class MapPointLedger {
 
   /// Calls f(id, point) for every point whose first position lies in `key`'s voxel or one of
   /// the 26 around it.
-  template <class F>
+  template <class Key, class F>
   void for_each_around(const Key& key, F&& f) {
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
@@ -162,6 +166,7 @@ class MapPointLedger {
 
   /// Anchors (points with `anchor`, not rejected) whose first position lies in `key`'s voxel or
   /// one of the 26 around it.
+  template <class Key>
   std::uint32_t anchors_around(const Key& key) {
     std::uint32_t n = 0;
     for_each_around(key, [&](std::uint64_t, const Point& p) { n += p.anchor && !p.rejected; });

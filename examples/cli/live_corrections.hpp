@@ -19,9 +19,6 @@
 #include <utility>
 #include <vector>
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>
-
 #include <knnocc/io/error.hpp>
 #include <knnocc/io/scan_source.hpp>
 #include <knnocc/io/sequence.hpp>
@@ -30,34 +27,10 @@
 #include <knnocc/live/live_mapper.hpp>
 
 #include "args.hpp"
+#include "eigen_pose.hpp"
 #include "map_outputs.hpp"
 #include "resource_limits.hpp"
 #include "view_frame.hpp"
-
-namespace knnocc::cli {
-
-/// A pose as the tool's from-scratch path applies it (io::transform_to_world,
-/// io::keyframe_to_world): R * p + t with Eigen, R from the quaternion once.
-struct EigenPose {
-  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();
-
-  static EigenPose from(const io::Pose& p) { return {p.q.toRotationMatrix(), p.t}; }
-  friend bool operator==(const EigenPose& a, const EigenPose& b) {
-    return a.r == b.r && a.t == b.t;
-  }
-};
-
-}  // namespace knnocc::cli
-
-template <>
-struct knnocc::pose_traits<knnocc::cli::EigenPose> {
-  static Point3d origin(const cli::EigenPose& p) { return {p.t.x(), p.t.y(), p.t.z()}; }
-  static Point3d to_world(const cli::EigenPose& p, const Point3f& q) {
-    const Eigen::Vector3d w = p.r * Eigen::Vector3d(q.x, q.y, q.z) + p.t;
-    return {w.x(), w.y(), w.z()};
-  }
-};
 
 namespace knnocc::cli {
 

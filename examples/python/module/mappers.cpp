@@ -1,0 +1,319 @@
+// Python's Mapper (one keyframe at a time, paper Alg. 3, any of the three models) and LiveMapper
+// (keyframes added, re-posed and removed under SLAM corrections; the map stays exact).
+
+#include <deque>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "binding.hpp"
+
+namespace knnocc::python {
+
+namespace {
+
+struct MapperRef {
+  std::shared_ptr<MapperOwner> owner;
+  std::string model;
+};
+struct LiveRef {
+  std::shared_ptr<LiveOwner> owner;
+  std::string model;
+};
+
+double number(py::handle v) {
+  const double x = PyFloat_AsDouble(v.ptr());
+  if (x == -1.0 && PyErr_Occurred()) throw py::error_already_set();
+  return x;
+}
+
+long long integer(py::handle v, const std::string& key, long long lo, long long hi) {
+  if (!py::isinstance<py::int_>(v)) throw py::type_error(key + " must be an integer");
+  int overflow = 0;
+  const long long x = PyLong_AsLongLongAndOverflow(v.ptr(), &overflow);
+  if (overflow || x < lo || x > hi)
+    throw py::value_error(key + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                          "], got " + py::str(v).cast<std::string>());
+  return x;
+}
+
+bool flag(py::handle v, const std::string& key) {
+  if (!py::isinstance<py::bool_>(v)) throw py::type_error(key + " must be True or False");
+  return v.cast<bool>();
+}
+
+constexpr const char* kCommon = "max_range, threads, clamp_min, clamp_max";
+constexpr const char* kOctoMap = "prob_hit, prob_miss, discretize";
+constexpr const char* kKnn = "k, w, p_upper, p_w, p_free, s_limit";
+
+// The keyword arguments of Mapper / LiveMapper for `model`; ValueError for a model or a
+// parameter it does not take, TypeError for a value of the wrong type.
+ModelOptions options_in(const char* cls, const std::string& model, const py::kwargs& kw,
+                        bool live) {
+  const bool octomap = model == "octomap", knn = model == "knn", robust = model == "robust";
+  if (!(octomap || knn || (robust && !live)))
+    throw py::value_error(std::string(cls) + ": model must be " +
+                          (live ? "'octomap' or 'knn' (the live mapper does not take the robust "
+                                  "model)"
+                                : "'octomap', 'knn' or 'robust'") +
+                          ", got '" + model + "'");
+  ModelOptions o;
+  double clamp_min = 0.1192, clamp_max = 0.971;
+  for (const auto& item : kw) {
+    const std::string key = py::str(item.first);
+    const py::handle v = item.second;
+    if (key == "max_range")
+      o.mapper.max_range = number(v);
+    else if (key == "threads")
+      o.mapper.threads = static_cast<unsigned>(integer(v, key, 1, 1024));
+    else if (key == "clamp_min")
+      clamp_min = number(v);
+    else if (key == "clamp_max")
+      clamp_max = number(v);
+    else if (octomap && key == "prob_hit")
+      o.prob_hit = number(v);
+    else if (octomap && key == "prob_miss")
+      o.prob_miss = number(v);
+    else if (octomap && key == "discretize")
+      o.mapper.discretize = flag(v, key);
+    else if (!octomap && key == "k")
+      o.knn.k = static_cast<std::size_t>(integer(v, key, 1, 4096));
+    else if (!octomap && key == "w")
+      o.knn.w = number(v);
+    else if (!octomap && key == "p_upper")
+      o.knn.p_upper = number(v);
+    else if (!octomap && key == "p_w")
+      o.knn.p_w = number(v);
+    else if (!octomap && key == "p_free")
+      o.knn.p_free = number(v);
+    else if (!octomap && key == "s_limit")
+      o.knn.s_limit = number(v);
+    else if (robust && key == "min_views")
+      o.min_views = static_cast<std::uint32_t>(integer(v, key, 1, 1000));
+    else
+      throw py::value_error(std::string(cls) + "(model='" + model + "'): unknown parameter '" +
+                            key + "' (takes " + kCommon + ", " + (octomap ? kOctoMap : kKnn) +
+                            (robust ? ", min_views" : "") + ")");
+  }
+  o.mapper.occupancy = occupancy_params(clamp_min, clamp_max);
+  return o;
+}
+
+py::dict stats_out(const TrackerStats& s) {
+  py::dict d;
+  if (!s.kept) return d;
+  d["k"] = s.k;
+  d["map_points"] = s.map_points;
+  d["valid"] = s.valid;
+  d["mu"] = s.mu;
+  d["sigma"] = s.sigma;
+  return d;
+}
+
+py::object map_of(const std::shared_ptr<MapOwner>& owner) {
+  return py::cast(MapRef{owner, nullptr});
+}
+
+// "Cls.member" for guards and messages, kept as long as the module (a guard keeps the name of
+// the writer it lets in).
+const char* member_name(const char* cls, const char* member) {
+  static std::deque<std::string> names;
+  return names.emplace_back(std::string(cls) + "." + member).c_str();
+}
+
+// What Mapper and LiveMapper have alike: map, model, statistics, memory_limit, repr.
+template <class Ref>
+void bind_owner_members(py::class_<Ref>& c, const char* cls, const char* models) {
+  c.def_property_readonly(
+      "map", [](const Ref& self) { return map_of(self.owner); },
+      "The map, as an OccupancyMap that reads only (it follows its owner).");
+  c.def_property_readonly(
+      "model", [](const Ref& self) { return self.model; }, models);
+  c.def(
+      "statistics",
+      [name = member_name(cls, "statistics")](const Ref& self) {
+        const auto lock = self.owner->guard.read(name);
+        return stats_out(self.owner->statistics());
+      },
+      "The k-NN statistics of the map point cloud: {'k', 'map_points', 'valid', 'mu', 'sigma'} "
+      "(the tool's `knn` line); {} for the OctoMap model.");
+  c.def_property(
+      "memory_limit",
+      [name = member_name(cls, "memory_limit")](const Ref& self) {
+        const auto lock = self.owner->guard.read(name);
+        return self.owner->map().memory_limit();
+      },
+      [name = member_name(cls, "memory_limit")](const Ref& self, std::size_t bytes) {
+        const auto lock = self.owner->guard.write(name);
+        self.owner->set_memory_limit(bytes);
+      },
+      "Bytes the map may use (0: no limit, the default); an insertion that would pass it raises "
+      "MemoryError.");
+  c.def("__repr__", [cls](const Ref& self) {
+    return std::string("<knnocc.") + cls + " model '" + self.model + "'>";
+  });
+}
+
+constexpr const char* kParamsDoc = R"(
+Keyword parameters, by model (defaults in brackets):
+  all models     max_range [-1: no limit]: points farther from the sensor free their ray up to
+                 max_range and mark nothing (OctoMap's maxrange); threads [1]: threads that
+                 walk the rays (the map is the same for every count); clamp_min [0.1192],
+                 clamp_max [0.971]: OctoMap's clamping, as probabilities
+  'octomap'      prob_hit [0.7], prob_miss [0.4], discretize [False]
+  'knn'          k [8], w [0], p_upper [0.9], p_w [0.65], p_free [0.4], s_limit [inf]: the
+                 paper's eq 13-15 (README "The k-NN model and the mapper")
+  'robust'       the 'knn' parameters and min_views [3] (Mapper only)
+ValueError for an unknown model or parameter, or a value out of range.)";
+
+constexpr const char* kMapperDoc =
+    R"(One keyframe at a time into an occupancy map (the paper's Alg. 3).
+
+Mapper(resolution, model="octomap", **params)
+
+  model="octomap"  OctoMap's insertPointCloud, bit for bit (dense depth cameras, LiDAR)
+  model="knn"      the paper's k-NN model: each point rated by its mean distance to its k
+                   nearest map points (sparse visual-SLAM keyframes)
+  model="robust"   beyond the paper: multi-view and independent support (ORB-SLAM keyframes
+                   with map-point ids)
+
+  mapper = knnocc.Mapper(0.1, model="knn", k=8)
+  for pose, points, ids in knnocc.read_sequence("keyframes"):
+      mapper.insert_keyframe(pose[:3, 3], knnocc.to_world(pose, points), ids)
+  mapper.map.write("map.bt")
+
+The same calls as the knnocc tool's `map` command build the same map, byte for byte.
+)";
+
+constexpr const char* kLiveDoc =
+    R"(An occupancy map that follows a SLAM system's corrections exactly.
+
+LiveMapper(resolution, model="octomap", **params)   (models 'octomap' and 'knn')
+
+It owns the keyframes: add(keyframe_id, pose, points, ids=None) with `pose` a 4x4
+sensor-to-world matrix and `points` in the sensor frame; repose({keyframe_id: pose}) after a
+bundle adjustment or loop closure; remove(ids) for keyframe culling. After every call .map equals,
+bit for bit, a Mapper over the current keyframes with their current poses (points moved by
+knnocc.to_world). The OctoMap model replays only the keyframes that see the changed region; the
+k-NN model rebuilds (its statistics change every later rating).
+)";
+
+}  // namespace
+
+void bind_mappers(py::module_& m) {
+  py::class_<MapperRef> mapper(m, "Mapper", (std::string(kMapperDoc) + kParamsDoc).c_str());
+  mapper.def(py::init([](double resolution, const std::string& model, const py::kwargs& kw) {
+               const ModelOptions o = options_in("Mapper", model, kw, false);
+               if (model == "octomap") return MapperRef{make_octomap_mapper(resolution, o), model};
+               if (model == "knn") return MapperRef{make_knn_mapper(resolution, o), model};
+               return MapperRef{make_robust_mapper(resolution, o), model};
+             }),
+             py::arg("resolution"), py::arg("model") = "octomap",
+             "A new mapper with an empty map; see help(knnocc.Mapper) for the parameters.");
+  mapper.def(
+      "insert_keyframe",
+      [](const MapperRef& self, const py::object& origin, const py::object& points,
+         const py::object& ids) {
+        const Point3d o = vec3_in(origin, "origin");
+        const PointsIn in(points, "points");
+        const std::vector<std::uint64_t> id = ids_in(ids, in.size(), "ids");
+        const auto lock = self.owner->guard.write("Mapper.insert_keyframe");
+        const py::gil_scoped_release nogil;
+        self.owner->insert_keyframe(o, in.view(), id);
+      },
+      py::arg("origin"), py::arg("points"), py::arg("ids") = py::none(),
+      R"(Alg. 3 for one keyframe: `points` (N, 3) in the world frame seen from `origin` (the sensor
+position, 3 numbers); `ids` one map-point id per point (e.g. ORB-SLAM's MapPoint::mnId) or None.
+The map point cloud is the union of the keyframes' points: an id joins once, at its first
+position; without ids every point is a new map point. A sequence gives ids always or never
+(ValueError otherwise). The OctoMap model ignores ids. MemoryError past memory_limit.)");
+  bind_owner_members(mapper, "Mapper", "'octomap', 'knn' or 'robust'.");
+
+  py::class_<LiveRef> live(m, "LiveMapper", (std::string(kLiveDoc) + kParamsDoc).c_str());
+  live.def(py::init([](double resolution, const std::string& model, const py::kwargs& kw) {
+             const ModelOptions o = options_in("LiveMapper", model, kw, true);
+             if (model == "octomap") return LiveRef{make_octomap_live(resolution, o), model};
+             return LiveRef{make_knn_live(resolution, o), model};
+           }),
+           py::arg("resolution"), py::arg("model") = "octomap",
+           "A new live mapper without keyframes; see help(knnocc.LiveMapper) for the parameters.");
+  live.def(
+      "add",
+      [](const LiveRef& self, const py::object& keyframe_id, const py::object& pose,
+         const py::object& points, const py::object& ids) {
+        const std::uint64_t id = id_in(keyframe_id, "keyframe_id");
+        const Pose p = pose_in(pose, "pose");
+        const PointsIn in(points, "points");
+        std::vector<std::uint64_t> map_ids = ids_in(ids, in.size(), "ids");
+        const auto lock = self.owner->guard.write("LiveMapper.add");
+        const py::gil_scoped_release nogil;
+        std::vector<Point3f> sensor(in.size());
+        in.view().visit([&](const auto& span) {
+          for (std::size_t i = 0; i < span.size(); ++i) sensor[i] = as_float(span[i]);
+        });
+        self.owner->add(id, p, std::move(sensor), std::move(map_ids));
+      },
+      py::arg("keyframe_id"), py::arg("pose"), py::arg("points"), py::arg("ids") = py::none(),
+      R"(Adds keyframe `keyframe_id` (a new non-negative integer): `pose` a 4x4 sensor-to-world
+matrix, `points` (N, 3) in the sensor frame (kept as float32), `ids` one map-point id per point
+or None (k-NN model: always or never). ValueError for a known id or a bad pose.)");
+  live.def(
+      "repose",
+      [](const LiveRef& self, const py::dict& poses) {
+        std::vector<std::pair<std::uint64_t, Pose>> list;
+        for (const auto& item : poses)
+          list.emplace_back(id_in(item.first, "keyframe id"), pose_in(item.second, "pose"));
+        const auto lock = self.owner->guard.write("LiveMapper.repose");
+        const py::gil_scoped_release nogil;
+        self.owner->repose(list);
+      },
+      py::arg("poses"),
+      "Re-poses keyframes at once: {keyframe_id: 4x4 pose} (a local bundle adjustment, a loop "
+      "closure). Poses equal to the stored ones change nothing. ValueError, with nothing "
+      "changed, for an unknown id.");
+  live.def(
+      "remove",
+      [](const LiveRef& self, const py::iterable& ids) {
+        std::vector<std::uint64_t> list;
+        for (const py::handle id : ids) list.push_back(id_in(id, "keyframe id"));
+        const auto lock = self.owner->guard.write("LiveMapper.remove");
+        const py::gil_scoped_release nogil;
+        self.owner->remove(list);
+      },
+      py::arg("ids"),
+      "Removes keyframes (keyframe culling). ValueError, with nothing changed, for an unknown id.");
+  live.def(
+      "__len__",
+      [](const LiveRef& self) {
+        const auto lock = self.owner->guard.read("LiveMapper.__len__");
+        return self.owner->size();
+      },
+      "The number of keyframes.");
+  live.def(
+      "__contains__",
+      [](const LiveRef& self, const py::object& id) {
+        if (!py::isinstance<py::int_>(id) || id.cast<py::int_>() < py::int_(0)) return false;
+        const std::uint64_t i = id_in(id, "keyframe id");
+        const auto lock = self.owner->guard.read("LiveMapper.__contains__");
+        return self.owner->contains(i);
+      },
+      py::arg("keyframe_id"), "Whether the keyframe is held.");
+  live.def_property_readonly(
+      "last_update",
+      [](const LiveRef& self) {
+        const auto lock = self.owner->guard.read("LiveMapper.last_update");
+        const LiveUpdate u = self.owner->last_update();
+        py::dict d;
+        d["changed"] = u.changed;
+        d["replayed"] = u.replayed;
+        d["bricks"] = u.bricks;
+        d["rebuilt"] = u.rebuilt;
+        return d;
+      },
+      "What the last add / repose / remove did: {'changed': keyframes added, re-posed or removed, "
+      "'replayed': keyframes whose rays were cast again, 'bricks': map bricks recomputed by a "
+      "regional replay, 'rebuilt': the map was built again from scratch}.");
+  bind_owner_members(live, "LiveMapper", "'octomap' or 'knn'.");
+}
+
+}  // namespace knnocc::python

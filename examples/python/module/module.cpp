@@ -1,0 +1,207 @@
+// The knnocc Python module: exceptions, the conversions of binding.hpp, and the parts bound in
+// map.cpp, mappers.cpp and io.cpp.
+
+#include <cmath>
+#include <string>
+
+#include <knnocc/io/error.hpp>
+#include <knnocc/version.hpp>
+
+#include <pybind11/eval.h>
+
+#include "binding.hpp"
+
+namespace knnocc::python {
+
+namespace {
+constexpr int kAligned = 0x0100;  // NPY_ARRAY_ALIGNED: numpy's flag, not in pybind11's enum
+template <class T>
+using InPlace = py::array_t<T, py::array::c_style | py::array::forcecast | kAligned>;
+
+std::string shape_text(const py::array& a) {
+  std::string s = "(";
+  for (py::ssize_t i = 0; i < a.ndim(); ++i) s += (i ? ", " : "") + std::to_string(a.shape(i));
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+// numpy's own conversion (np.asarray) to a C-contiguous float64 array; ValueError if it fails.
+py::array_t<double> doubles_in(py::handle obj, const char* name) {
+  auto a = InPlace<double>::ensure(obj);
+  if (!a) throw py::value_error(std::string(name) + " must be an array of numbers");
+  return std::move(a);
+}
+}  // namespace
+
+PointsIn::PointsIn(py::handle obj, const char* name) {
+  const bool f32 = py::isinstance<py::array>(obj) &&
+                   py::reinterpret_borrow<py::array>(obj).dtype().equal(py::dtype::of<float>());
+  if (f32)
+    array_ = InPlace<float>::ensure(obj);
+  else
+    array_ = InPlace<double>::ensure(obj);
+  if (!array_) throw py::value_error(std::string(name) + " must be an (N, 3) array of numbers");
+  if (array_.ndim() < 1 || array_.shape(array_.ndim() - 1) != 3)
+    throw py::value_error(std::string(name) + " must have shape (N, 3), got " + shape_text(array_));
+  view_ = PointsView{array_.data(), static_cast<std::size_t>(array_.size() / 3), f32};
+  last_points_input = {reinterpret_cast<std::uintptr_t>(array_.data()), array_.ptr() != obj.ptr()};
+}
+
+std::vector<py::ssize_t> PointsIn::outer_shape() const {
+  return std::vector<py::ssize_t>(array_.shape(), array_.shape() + array_.ndim() - 1);
+}
+
+Point3d vec3_in(py::handle obj, const char* name) {
+  const auto a = doubles_in(obj, name);
+  if (a.size() != 3) throw py::value_error(std::string(name) + " must be 3 numbers");
+  const double* v = a.data();
+  if (!(std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])))
+    throw py::value_error(std::string(name) + " must be finite");
+  return {v[0], v[1], v[2]};
+}
+
+Pose pose_in(py::handle obj, const char* name) {
+  const auto a = doubles_in(obj, name);
+  const std::string what(name);
+  if (a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4)
+    throw py::value_error(what + " must be a 4x4 matrix, got shape " + shape_text(a));
+  const double* m = a.data();  // row-major
+  for (int i = 0; i < 16; ++i)
+    if (!std::isfinite(m[i])) throw py::value_error(what + " must be finite");
+  if (m[12] != 0.0 || m[13] != 0.0 || m[14] != 0.0 || m[15] != 1.0)
+    throw py::value_error(what + ": the last row of a rigid transform is 0 0 0 1");
+  Pose p;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) p.r(r, c) = m[4 * r + c];
+    p.t(r) = m[4 * r + 3];
+  }
+  const double off = (p.r.transpose() * p.r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (!(off <= 1e-3) || !(p.r.determinant() > 0.0))
+    throw py::value_error(what + ": the upper-left 3x3 block is not a rotation (within 1e-3)");
+  return p;
+}
+
+std::vector<std::uint64_t> ids_in(py::handle obj, std::size_t n, const char* name) {
+  if (obj.is_none()) return {};
+  const std::string what(name);
+  const auto kind = py::array::ensure(obj);  // plain conversion, to look at the dtype
+  if (!kind || (kind.dtype().kind() != 'i' && kind.dtype().kind() != 'u'))
+    throw py::value_error(what + " must be integers (one map-point id per point) or None");
+  std::vector<std::uint64_t> ids;
+  auto check_length = [&](const py::array& a) {
+    if (a.ndim() != 1 || static_cast<std::size_t>(a.size()) != n)
+      throw py::value_error(what + " must hold one id per point: " + std::to_string(n) +
+                            " expected, got shape " + shape_text(a));
+  };
+  if (kind.dtype().kind() == 'u') {
+    const auto a = InPlace<std::uint64_t>::ensure(kind);
+    check_length(a);
+    ids.assign(a.data(), a.data() + a.size());
+  } else {
+    const auto a = InPlace<std::int64_t>::ensure(kind);
+    check_length(a);
+    ids.reserve(n);
+    for (py::ssize_t i = 0; i < a.size(); ++i) {
+      if (a.data()[i] < 0) throw py::value_error(what + " must not be negative");
+      ids.push_back(static_cast<std::uint64_t>(a.data()[i]));
+    }
+  }
+  return ids;
+}
+
+std::uint64_t id_in(py::handle obj, const char* name) {
+  if (!py::isinstance<py::int_>(obj))
+    throw py::type_error(std::string(name) + " must be an integer");
+  const auto v = obj.cast<py::int_>();
+  if (v < py::int_(0)) throw py::value_error(std::string(name) + " must not be negative");
+  try {
+    return obj.cast<std::uint64_t>();
+  } catch (const py::cast_error&) {
+    throw py::value_error(std::string(name) + " must be below 2**64");
+  }
+}
+
+std::string path_in(py::handle obj) {
+  return py::module_::import("os").attr("fsdecode")(obj).cast<std::string>();
+}
+
+py::array_t<double> pose_out(const Pose& p) {
+  py::array_t<double> a({4, 4});
+  double* m = a.mutable_data();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) m[4 * r + c] = p.r(r, c);
+    m[4 * r + 3] = p.t(r);
+  }
+  m[12] = m[13] = m[14] = 0.0;
+  m[15] = 1.0;
+  return a;
+}
+
+MapObject& MapRef::writable(const char* what) const {
+  if (!object)
+    throw py::value_error(std::string(what) +
+                          ": this map belongs to a Mapper or LiveMapper and is read-only "
+                          "(insert through its owner)");
+  return *object;
+}
+
+}  // namespace knnocc::python
+
+PYBIND11_MODULE(knnocc, m) {
+  namespace py = pybind11;
+  using namespace knnocc::python;
+  m.doc() = R"(knnocc: 3D occupancy mapping (OctoMap's model bit for bit, the k-NN model, the robust
+model), numpy in and numpy out, on the header-only C++ library.
+
+  import knnocc, numpy as np
+  m = knnocc.OccupancyMap(0.1)
+  m.insert_point_cloud(np.random.rand(1000, 3).astype(np.float32), origin=(0, 0, 0))
+  m.occupancy_at([[0.5, 0.5, 0.5]])      # -1 unknown, 0 free, 1 occupied
+  m.write("map.bt")                      # octovis opens it
+
+Classes: OccupancyMap, Mapper (one keyframe at a time, any model), LiveMapper (keyframes added,
+re-posed, removed under SLAM corrections), Sequence (read_sequence). Functions: read_points,
+read_sequence, read_trajectory, read_map, to_world, cast_ray.
+Threads: the GIL is released during insertion, queries, ray casts and file I/O, so threads work
+on different objects at once. One object takes one writer, or readers while no writer runs; a
+call that would break this raises RuntimeError. Errors: bad arguments ValueError (wrong types
+TypeError), unreadable or malformed files knnocc.Error (an OSError naming the file), the memory
+limit MemoryError.)";
+  m.attr("__version__") = KNNOCC_VERSION_STRING;
+
+  // knnocc.Error: an OSError whose str() is the library's one line, "FILE: problem" (OSError's
+  // own str() would show "[Errno None] None: 'FILE'" once filename is set). Kept for the life of
+  // the process: the translator raises it at any time.
+  py::dict scope;
+  scope["__name__"] = "knnocc";
+  py::exec(R"(class Error(OSError):
+    """An unreadable or malformed input file, or an output that cannot be written.
+
+    str(e) is "FILE: problem"; e.filename is the file and e.strerror the problem."""
+
+    def __str__(self):
+        return str(self.args[0]) if len(self.args) == 1 else super().__str__()
+)",
+           scope);
+  static PyObject* error = py::object(scope["Error"]).release().ptr();
+  m.add_object("Error", py::handle(error).inc_ref());
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const knnocc::io::Error& e) {
+      py::object exc = py::handle(error)(e.what());
+      exc.attr("filename") = e.file();
+      exc.attr("strerror") = e.problem();
+      PyErr_SetObject(error, exc.ptr());
+    }
+  });
+
+  bind_map(m);
+  bind_mappers(m);
+  bind_io(m);
+
+  m.def(
+      "_last_points_input",
+      [] { return py::make_tuple(last_points_input.address, last_points_input.converted); },
+      "For tests: (address, converted) of the last point array this thread passed in: the "
+      "address of the buffer the library read, and whether the input had to be converted.");
+}

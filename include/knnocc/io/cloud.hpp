@@ -4,7 +4,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "../core/point3.hpp"  // knnocc::Point3f
+#include "../core/point3.hpp"          // knnocc::Point3f
+#include "../core/point_evidence.hpp"  // knnocc::PointEvidence
 
 namespace knnocc::io {
 
@@ -13,6 +14,10 @@ struct Cloud {
   // One id per point when the file carries an id property (e.g. ORB-SLAM map-point ids);
   // empty otherwise.
   std::vector<std::uint64_t> ids;
+  // One per point when the file carries any of the SLAM counters `found`, `visible`,
+  // `observations` (PLY vertex properties, core/point_evidence.hpp; absent ones read 0); empty
+  // otherwise.
+  std::vector<PointEvidence> evidence;
 };
 
 }  // namespace knnocc::io

@@ -92,18 +92,20 @@ before the summary: knn k K map_points N valid N mu X sigma X rays R of E median
   --p-free P            free-ray probability (default 0.4, OctoMap's miss; in (0, 0.5))
   --s-limit X           valid map points have s_p < X (default: no limit)
   (--discretize does not apply to the k-NN model)
-robust model (--model robust, sensor/robust_model.hpp): an endpoint adds evidence only once its
-map point has been observed by --min-views keyframes (default 3) and another keyframe's map point
-lies within 1.75 times the mean k-NN distance, or by two keyframes and 12 such points lie there (the
-keyframe that commits it also adds the deferred evidence); a patch (4 points of its own keyframe
-near it) waits for a keyframe 5 keyframes later, a point that is not a patch, seen over 5
-keyframes, needs no support, and a point held back whose voxel touches one holding a point
-committed by those rules adds its evidence without a ray; it casts its free ray from the
-fourth view on; eq 13 floored at P_w (a confirmed point is never pushed towards free), one
-keyframe adds the mean of its endpoints in a voxel; without map-point ids it is OctoMap's model
-and keeps no map point cloud (the knn line then says map_points 0).
+robust model (--model robust, sensor/robust_model.hpp, docs/robust_model.md): for sparse visual-SLAM
+keyframes with map-point ids. A map point is believed real while P(real) >= 1/2 under a two-class
+mixture of real structure and wrong matches whose rates it estimates from the sequence itself: how
+often the keyframes that met a point saw through it (a ray crossed its voxel and ended more than
+--margin-scale mean k-NN distances beyond), how many points of other keyframes lie near it, and the
+SLAM system's found/visible counts when the clouds carry them (PLY `found`, `visible`,
+`observations`). The mixture counts only while its wrong class is less supported than its real
+one (else every point is believed). A believed point adds eq 13's log-odds (from two detections on
+at least P_w) and casts its ray from its second detection; a point no longer believed takes its
+evidence back. One keyframe adds the mean of its endpoints in a voxel. Without map-point ids it is
+OctoMap's model and keeps no map point cloud (the knn line then says map_points 0).
 Takes the k-NN flags above. Prints the same knn line.
-  --min-views N         keyframes that confirm a map point (default 3, in [1, 1000])
+  --margin-scale X      a ray sees through a point when it ends more than X mean k-NN distances
+                        beyond it (default 2, in [0, 100])
 exit status: 0 success, 2 bad input (one line on stderr naming the file and the problem).
 )";
 }
@@ -200,6 +202,7 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   std::vector<Point3f> world_f;  // OctoMap model: float points, as liboctomap
   std::vector<Point3d> world;    // k-NN model: double, as the tracker keeps them
   std::vector<std::uint64_t> ids;
+  std::vector<PointEvidence> evidence;  // the SLAM counters, when the clouds carry them
   for (std::size_t i = opt.first; i < last; ++i) try {
       io::Scan scan = source.load(i);
       up_estimate.add(scan.pose, scan.cloud.points);
@@ -207,13 +210,13 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
       const Point3d origin{scan.pose.t.x(), scan.pose.t.y(), scan.pose.t.z()};
       const std::size_t enough = map_share / kBrickBytesAtLeast;
       if constexpr (Mapper<Model>::uses_map_cloud) {
-        io::keyframe_to_world(scan.pose, scan.cloud, opt.crop, world, ids);
+        io::keyframe_to_world(scan.pose, scan.cloud, opt.crop, world, ids, &evidence);
         const std::size_t bricks =
             at_least_bricks(origin, world, mapper.map().grid().resolution(), -1.0, false, enough);
         if (bricks > enough)
           throw too_big(i, "the points alone need more than " + std::to_string(enough) + " bricks");
         try {
-          add(mapper.insert_keyframe(scan.pose.t, world, ids));
+          add(mapper.insert_keyframe(scan.pose.t, world, ids, evidence));
         } catch (const std::invalid_argument& e) {  // e.g. clouds with and without ids mixed
           throw io::Error(source_path_for_errors(opt.input, i), e.what());
         }
@@ -301,14 +304,14 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
 }
 
 inline int run_map(const std::vector<std::string>& argv) {
-  const Args args(argv,
-                  with_map_outputs({"--input",       "--res",        "--model",       "--max-range",
-                                    "--crop",        "--out-voxels", "--voxels",      "--threads",
-                                    "--k",           "--w",          "--p-upper",     "--p-w",
-                                    "--p-free",      "--s-limit",    "--corrections", "--init-map",
-                                    "--save-every",  "--first",      "--count",       "--min-views",
-                                    "--memory-limit"}),
-                  with_map_output_flags({"--discretize"}));
+  const Args args(
+      argv, with_map_outputs({"--input",       "--res",        "--model",       "--max-range",
+                              "--crop",        "--out-voxels", "--voxels",      "--threads",
+                              "--k",           "--w",          "--p-upper",     "--p-w",
+                              "--p-free",      "--s-limit",    "--corrections", "--init-map",
+                              "--save-every",  "--first",      "--count",       "--margin-scale",
+                              "--memory-limit"}),
+      with_map_output_flags({"--discretize"}));
   if (args.help()) {
     std::fputs(map_help().c_str(), stdout);
     return 0;
@@ -381,7 +384,7 @@ inline int run_map(const std::vector<std::string>& argv) {
   if (model == "octomap") {
     for (const char* knn_only : {"--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"})
       if (args.has(knn_only)) throw UsageError(std::string(knn_only) + " needs --model knn");
-    if (args.has("--min-views")) throw UsageError("--min-views needs --model robust");
+    if (args.has("--margin-scale")) throw UsageError("--margin-scale needs --model robust");
     if (args.has("--corrections")) return run_map_corrections(args, opt, OctoMapModel{});
     return run_map_with(args, opt, OctoMapModel{});
   }
@@ -393,13 +396,12 @@ inline int run_map(const std::vector<std::string>& argv) {
           "take the robust model)");
     RobustModelParams rp;
     rp.knn = knn_params(args);
-    const long views = args.integer("--min-views", static_cast<long>(rp.min_views));
-    if (views < 1 || views > 1000)
-      throw UsageError("--min-views must be in [1, 1000], got " + args.str("--min-views"));
-    rp.min_views = static_cast<std::uint32_t>(views);
+    rp.margin_scale = args.number("--margin-scale", rp.margin_scale);
+    if (!(rp.margin_scale >= 0 && rp.margin_scale <= 100))
+      throw UsageError("--margin-scale must be in [0, 100], got " + args.str("--margin-scale"));
     return run_map_with(args, opt, RobustModel(rp));
   }
-  if (args.has("--min-views")) throw UsageError("--min-views needs --model robust");
+  if (args.has("--margin-scale")) throw UsageError("--margin-scale needs --model robust");
   if (args.has("--corrections")) return run_map_corrections(args, opt, KnnModel(knn_params(args)));
   return run_map_with(args, opt, KnnModel(knn_params(args)));
 }

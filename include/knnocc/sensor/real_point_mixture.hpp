@@ -19,7 +19,8 @@
 //   the class                prior = P(real)
 // so that (G(x; m) = (1 - q) q^x with q = m / (1 + m))
 //   log-odds(real) = logit(prior) + c log(e_r / e_w) + d log((1 - e_r) / (1 - e_w))
-//                    + log(G(u; u_r) / G(u; u_w)) + f log(f_r / f_w) + (v - f) log((1 - f_r) / (1 - f_w))
+//                    + log(G(u; u_r) / G(u; u_w)) + f log(f_r / f_w) + (v - f) log((1 - f_r) / (1 -
+//                    f_w))
 //                    [+ log(G(g; g_r) / G(g; g_w))].
 // The parameters are fitted to all map points by expectation-maximisation on the histogram of
 // their counts (points with equal counts share their responsibilities), from the previous
@@ -154,21 +155,6 @@ class RealPointMixture {
       ll += b.points * (m + std::log(std::exp(a - m) + std::exp(z - m)));
     }
     return ll;
-  }
-
-  /// Converges from the current estimate and from the starting rates (RealPointRates{}) and keeps
-  /// the estimate of higher likelihood.
-  void fit_both(double tolerance = 1e-6, int max_steps = 1000) {
-    fit(tolerance, max_steps);
-    const RealPointRates warm = r_;
-    const double lw = log_likelihood();
-    r_ = RealPointRates{};
-    update();
-    fit(tolerance, max_steps);
-    if (lw >= log_likelihood()) {
-      r_ = warm;
-      update();
-    }
   }
 
   /// Steps until no parameter moves by more than `tolerance` (relative), at most `max_steps`;

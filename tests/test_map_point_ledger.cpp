@@ -18,13 +18,16 @@ using namespace knnocc;
 
 TEST_CASE("ledger: views once per keyframe, first position and creator kept, stable indices") {
   MapPointLedger l;
-  bool fresh = false;
-  l.observe(5, {1, 0, 0}, 0, fresh);
+  bool fresh = false, counted = false;
+  CHECK(l.observe(5, {1, 0, 0}, 0, fresh, counted) == 0);
   CHECK(fresh);
-  l.observe(5, {1, 0, 0}, 0, fresh);  // the same keyframe again
+  CHECK(counted);
+  l.observe(5, {1, 0, 0}, 0, fresh, counted);  // the same keyframe again
   CHECK_FALSE(fresh);
-  l.observe(9, {2, 0, 0}, 1, fresh);
-  const auto& e = l.observe(5, {9, 9, 9}, 3, fresh);
+  CHECK_FALSE(counted);
+  l.observe(9, {2, 0, 0}, 1, fresh, counted);
+  const auto& e = l.at(l.observe(5, {9, 9, 9}, 3, fresh, counted));
+  CHECK(counted);
   CHECK(e.views == 2);
   CHECK(e.first == 0);  // its creator
   CHECK(e.last == 3);
@@ -45,14 +48,33 @@ TEST_CASE("voxel tally: see-throughs equal a brute-force walk, each keyframe onc
   std::uniform_real_distribution<double> u(-2.0, 2.0);
   OccupancyMap<OcKey> map(0.1);
   VoxelTally tally;
+  // Cells for the voxels of a few hundred map points: on_pass reports those.
+  std::set<std::uint32_t> cells;
+  std::map<std::uint32_t, std::uint64_t> cell_key;
+  for (int i = 0; i < 300; ++i) {
+    OcKey k;
+    REQUIRE(map.grid().coord_to_key(u(rng), u(rng), u(rng) * 0.2 + 1.0, k));
+    const std::uint32_t s = tally.slot(k);
+    CHECK(tally.slot(k) == s);
+    CHECK(tally.find(k) == s);
+    cells.insert(s);
+    cell_key[s] = k.pack();
+  }
+  CHECK(tally.size() == cells.size());
   std::map<std::uint64_t, std::uint32_t> want;
   for (std::uint32_t kf = 0; kf < 12; ++kf) {
     const Point3d origin{u(rng) * 0.3, u(rng) * 0.3, 0.0};
     std::vector<Point3d> pts;
     for (int j = 0; j < 80; ++j) pts.push_back({u(rng), u(rng), u(rng) * 0.2 + 1.0});
     const double margin = 0.1 + 0.02 * kf;
-    tally.add_keyframe(map.grid(), origin, pts, margin, kf,
-                       [](std::size_t j) { return j % 7 != 3; });  // some rays left out
+    std::set<std::uint32_t> reported;  // on_pass: once per voxel with a cell the keyframe crossed
+    std::size_t calls = 0;
+    tally.add_keyframe(
+        map.grid(), origin, pts, margin, kf, [](std::size_t j) { return j % 7 != 3; },
+        [&](std::uint32_t slot) {
+          reported.insert(slot);
+          ++calls;
+        });                           // some rays left out
     std::set<std::uint64_t> crossed;  // brute force: the shortened segment, voxel by voxel
     std::vector<OcKey> keys;
     for (std::size_t j = 0; j < pts.size(); ++j) {
@@ -70,23 +92,26 @@ TEST_CASE("voxel tally: see-throughs equal a brute-force walk, each keyframe onc
       for (const OcKey& k : keys) crossed.insert(k.pack());
     }
     for (const std::uint64_t k : crossed) ++want[k];
+    std::set<std::uint32_t> expect;
+    for (const std::uint32_t s : cells)
+      if (crossed.count(cell_key[s])) expect.insert(s);
+    CHECK(calls == expect.size());
+    CHECK(reported == expect);
   }
   std::size_t checked = 0, twice = 0;
   for (const auto& [key, passes] : want) {
-    const std::uint32_t s = tally.find(key);
-    REQUIRE(s != VoxelTally::kNone);
-    CHECK(tally.at(s).passes == passes);
+    CHECK(tally.passes(OcKey::unpack(key)) == passes);
     ++checked;
     twice += passes >= 2;
   }
-  CHECK(tally.size() == want.size());
+  for (const std::uint32_t s : cells) {
+    const auto it = want.find(cell_key[s]);
+    CHECK(tally.passes_at(s) == (it == want.end() ? 0u : it->second));
+  }
   CHECK(checked > 1000);
   CHECK(twice > 100);  // the keyframes overlap: counts above one are exercised
-  // A voxel no ray crossed has no pass; slot() makes it.
-  OcKey far;
+  OcKey far;           // a voxel no ray reached
   REQUIRE(map.grid().coord_to_key(50.0, 50.0, 50.0, far));
-  CHECK(tally.find(far.pack()) == VoxelTally::kNone);
-  const std::uint32_t s = tally.slot(far.pack());
-  CHECK(tally.at(s).passes == 0);
-  CHECK(tally.slot(far.pack()) == s);
+  CHECK(tally.passes(far) == 0);
+  CHECK(tally.find(far) == VoxelTally::kNone);
 }

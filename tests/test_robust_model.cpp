@@ -265,7 +265,7 @@ TEST_CASE("robust model: its ledger and see-throughs equal a brute-force recompu
   CHECK(disbelieved > 5);  // ... and so is taking evidence back
   CHECK(model.wrong_class_found());
   for (const std::uint64_t v : voxels) {
-    const std::uint32_t s = model.voxels().find(v);
+    const std::uint32_t s = model.voxels().find(OcKey::unpack(v));
     REQUIRE(s != VoxelTally::kNone);
     CHECK(model.voxels().at(s).believed == believed_in[v]);
     // A voxel whose points are all disbelieved is not left occupied.

@@ -34,14 +34,20 @@ class MapPointLedger {
     /// Its detections' shares of their voxels: each detection counts 1 / (the keyframe's endpoints
     /// in that voxel), so that its evidence is that of the detections it stands for.
     float shares = 0.0f;
-    float added = 0.0f;  ///< occupied log-odds it has put into its voxel (in the map)
-    PointEvidence slam;  ///< the SLAM system's counters at its latest detection
+    float added = 0.0f;         ///< occupied log-odds it has put into its voxel (in the map)
+    PointEvidence slam;         ///< the SLAM system's counters at its latest detection
+    std::uint32_t bin = kNone;  ///< its counts' bin in the model's mixture
+    std::uint32_t next_in_voxel = kNone;  ///< the next map point in its voxel (VoxelTally list)
+    std::uint32_t touched = 0;            ///< keyframe + 1 that last changed its counts
   };
 
   /// The point `id` detected by keyframe `keyframe` at `p` (the first position is kept); views
-  /// count once per keyframe. `fresh` tells whether the point is new.
-  Point& observe(std::uint64_t id, const Point3d& p, std::uint32_t keyframe, bool& fresh) {
+  /// count once per keyframe. Returns its index; `fresh` tells whether the point is new, `counted`
+  /// whether this detection counted as a view (the keyframe's first of the point).
+  std::uint32_t observe(std::uint64_t id, const Point3d& p, std::uint32_t keyframe, bool& fresh,
+                        bool& counted) {
     fresh = false;
+    counted = false;
     const std::uint32_t i =
         index_.find_or_insert(id, static_cast<std::uint32_t>(points_.size()), fresh);
     if (fresh) {
@@ -54,8 +60,9 @@ class MapPointLedger {
     if (fresh || e.last != keyframe) {
       ++e.views;
       e.last = keyframe;
+      counted = true;
     }
-    return e;
+    return i;
   }
 
   /// The ledger index of `id` (kNone when unknown); indices never change.

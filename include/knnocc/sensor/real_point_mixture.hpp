@@ -90,13 +90,35 @@ class RealPointMixture {
     return l;
   }
 
-  /// Collects the counts of every map point: clear(), then add() each, then step() or fit().
+  /// The histogram of the map points' counts: clear() and add() each, or keep it up to date with
+  /// insert() and erase() as points' counts change; then step() or fit().
   void clear() {
     index_.clear();
     with_slam_.clear();
     bins_.clear();
+    bin_log_odds_.clear();
   }
-  void add(PointCounts k) {
+  void add(const PointCounts& k) { ++bins_[bin(k)].points; }
+  /// A point with counts k joins the histogram; returns its bin (stable).
+  std::uint32_t insert(const PointCounts& k) {
+    const std::uint32_t b = bin(k);
+    ++bins_[b].points;
+    return b;
+  }
+  /// A point leaves bin b.
+  void erase(std::uint32_t b) { --bins_[b].points; }
+  /// Log-odds of bin b's counts, as of the last refresh().
+  double bin_log_odds(std::uint32_t b) const { return bin_log_odds_[b]; }
+  /// Computes every bin's log-odds with the current rates (for bin_log_odds()).
+  void refresh() {
+    bin_log_odds_.resize(bins_.size());
+    for (std::size_t b = 0; b < bins_.size(); ++b)
+      if (bins_[b].points > 0) bin_log_odds_[b] = log_odds(bins_[b].k);
+  }
+
+ private:
+  // The bin of counts k, made when new.
+  std::uint32_t bin(PointCounts k) {
     // Counts keep their value below 2^16 - 1 (larger ones share the top bin; f and v are scaled
     // together so that f <= v holds).
     auto cap = [](std::uint32_t x) { return std::min<std::uint32_t>(x, 0xFFFE); };
@@ -116,15 +138,18 @@ class RealPointMixture {
       fresh = it.second;
     }
     if (fresh) bins_.push_back(Bin{k, 0});
-    ++bins_[i].points;
+    return i;
   }
+
+ public:
   /// Number of distinct counts collected.
   std::size_t bins() const { return bins_.size(); }
 
   /// One expectation-maximisation step from the current estimate.
   void step() {
     Sums s;
-    for (const Bin& b : bins_) s.add(b, 1.0 / (1.0 + std::exp(-log_odds(b.k))));
+    for (const Bin& b : bins_)
+      if (b.points > 0) s.add(b, 1.0 / (1.0 + std::exp(-log_odds(b.k))));
     if (s.all == 0) return;
     const double wrong = s.all - s.w;
     r_.prior = (s.w + 1) / (s.all + 2);
@@ -250,6 +275,7 @@ class RealPointMixture {
   detail::FlatIndex index_;  // packed (d, c, u, g) -> bin, points without SLAM counts
   std::unordered_map<SlamKey, std::uint32_t, SlamKeyHash> with_slam_;
   std::vector<Bin> bins_;
+  std::vector<double> bin_log_odds_;
 };
 
 }  // namespace knnocc

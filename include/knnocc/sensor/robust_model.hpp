@@ -85,7 +85,7 @@ struct RobustRules {
   static PointCounts counts(const MapPointLedger::Point& p, const VoxelTally& tally) {
     PointCounts k;
     k.d = std::max(p.views, p.slam.observations);
-    k.c = p.voxel == VoxelTally::kNone ? 0 : tally.at(p.voxel).passes;
+    k.c = p.voxel == VoxelTally::kNone ? 0 : tally.passes_at(p.voxel);
     k.u = p.support;
     if (p.slam.has_ratio()) k.f = p.slam.found, k.v = p.slam.visible;
     k.g = p.last - p.first + 1 - p.views;
@@ -146,10 +146,13 @@ class BasicRobustModel {
         ratings[j] = EndpointRating{hit_ * share, true};
         continue;
       }
-      const std::uint32_t views = ledger_.find(id) ? ledger_.find(id)->views : 0;
-      MapPointLedger::Point& p = observe(kf, j);
-      if (p.views != views) p.shares += share;  // once per keyframe, as its views
+      bool counted = false;
+      const std::uint32_t i = observe(kf, j, counted);
+      index_[j] = i;
+      MapPointLedger::Point& p = ledger_.at(i);
+      if (counted) p.shares += share;  // once per keyframe, as its views
       if (!kf.evidence.empty()) p.slam = kf.evidence[j];
+      touch(i, kf.index);
       if (real_log_odds(p) < 0.0) {
         ratings[j] = EndpointRating{0.0f, false};
         continue;
@@ -167,21 +170,33 @@ class BasicRobustModel {
     if (!kf.has_ids) return;
     for (std::size_t j = 0; j < kf.points.size(); ++j) {
       if (kf.ids[j] == KeyframeUnion::kNoId || ratings[j].logodds == 0.0f) continue;
-      MapPointLedger::Point& p = *ledger_.find(kf.ids[j]);
+      MapPointLedger::Point& p = ledger_.at(index_[j]);
       p.added += ratings[j].logodds;
       set_believed(p, true);
     }
     const RunningNormal& dist = kf.tracker.distribution();
     if (dist.count() > 0)  // the margin needs a scale
-      tally_.add_keyframe(kf.map.grid(), kf.origin, kf.points, params_.margin_scale * dist.mean(),
-                          static_cast<std::uint32_t>(kf.index),
-                          [&](std::size_t j) { return kf.ids[j] != KeyframeUnion::kNoId; });
-    mixture_.clear();
-    ledger_.for_each(
-        [&](std::uint64_t, const MapPointLedger::Point& p) { mixture_.add(counts(p)); });
+      tally_.add_keyframe(
+          kf.map.grid(), kf.origin, kf.points, params_.margin_scale * dist.mean(),
+          static_cast<std::uint32_t>(kf.index),
+          [&](std::size_t j) { return kf.ids[j] != KeyframeUnion::kNoId; },
+          [&](std::uint32_t slot) {
+            for (std::uint32_t i = tally_.at(slot).first_point; i != MapPointLedger::kNone;
+                 i = ledger_.at(i).next_in_voxel)
+              touch(i, kf.index);
+          });
+    // The points whose counts changed move to their new bins; then one EM step.
+    for (const std::uint32_t i : touched_) {
+      MapPointLedger::Point& p = ledger_.at(i);
+      if (p.bin != MapPointLedger::kNone) mixture_.erase(p.bin);
+      p.bin = mixture_.insert(counts(p));
+    }
+    touched_.clear();
     mixture_.step();
+    mixture_.refresh();
+    const bool found = wrong_class_found();
     ledger_.for_each([&](std::uint64_t id, MapPointLedger::Point& p) {
-      const bool real = real_log_odds(p) >= 0.0;
+      const bool real = !found || mixture_.bin_log_odds(p.bin) >= 0.0;
       if (real == p.believed) return;
       if (!real) {
         take_back(p, map);
@@ -199,22 +214,24 @@ class BasicRobustModel {
   // support: the map points within margin_scale * mu (the see-through margin: one scale for
   // "near") that other keyframes created, each of which counts the new point too.
   template <class Key, class Tracker>
-  MapPointLedger::Point& observe(const KeyframeView<Key, Tracker>& kf, std::size_t j) {
+  std::uint32_t observe(const KeyframeView<Key, Tracker>& kf, std::size_t j, bool& counted) {
     bool fresh = false;
     const auto keyframe = static_cast<std::uint32_t>(kf.index);
-    MapPointLedger::Point& p = ledger_.observe(kf.ids[j], kf.points[j], keyframe, fresh);
-    if (!fresh) return p;
+    const std::uint32_t self = ledger_.observe(kf.ids[j], kf.points[j], keyframe, fresh, counted);
+    if (!fresh) return self;
+    MapPointLedger::Point& p = ledger_.at(self);
     Key k;  // as the scan finds the endpoint's voxel (float)
     p.has_key = kf.map.grid().point_to_key(detail::to_point3f(p.position), k);
     if (p.has_key) {
       p.key = k.pack();
-      p.voxel = tally_.slot(p.key);
+      p.voxel = tally_.slot(k);
+      p.next_in_voxel = tally_.at(p.voxel).first_point;
+      tally_.at(p.voxel).first_point = self;
     }
     const RunningNormal& dist = kf.tracker.distribution();
-    if (dist.count() == 0 || !kf.tracker.contains(kf.ids[j])) return p;
+    if (dist.count() == 0 || !kf.tracker.contains(kf.ids[j])) return self;
     const double r = params_.margin_scale * dist.mean();
     kf.tracker.radius(kf.tracker.position(kf.ids[j]), r * r, near_);
-    const std::uint32_t self = ledger_.index_of(kf.ids[j]);
     for (const auto i : near_) {
       const std::uint32_t other = ledger_.index_of(kf.tracker.id_at(i));
       if (other == MapPointLedger::kNone || other == self) continue;
@@ -222,8 +239,18 @@ class BasicRobustModel {
       if (o.first == keyframe) continue;  // the same creator
       ++o.support;
       ++ledger_.at(self).support;
+      touch(other, kf.index);
     }
-    return ledger_.at(self);
+    return self;
+  }
+
+  // Point i's counts changed in keyframe `keyframe`: its bin is renewed at the keyframe's end.
+  void touch(std::uint32_t i, std::size_t keyframe) {
+    MapPointLedger::Point& p = ledger_.at(i);
+    const auto stamp = static_cast<std::uint32_t>(keyframe + 1);
+    if (p.touched == stamp) return;
+    p.touched = stamp;
+    touched_.push_back(i);
   }
 
   void set_believed(MapPointLedger::Point& p, bool believed) {
@@ -265,6 +292,7 @@ class BasicRobustModel {
     const std::size_t n = kf.points.size();
     keys_.assign(n, detail::FlatIndex::kEmpty);
     in_voxel_.assign(n, 1);
+    index_.assign(n, MapPointLedger::kNone);
     voxels_.clear();
     voxel_count_.clear();
     for (std::size_t j = 0; j < n; ++j) {
@@ -293,7 +321,8 @@ class BasicRobustModel {
   RealPointMixture mixture_;
   // Per keyframe (kept for their memory).
   std::vector<std::uint64_t> keys_;  // each endpoint's voxel (Key::pack(), kEmpty: none)
-  std::vector<std::uint32_t> in_voxel_, voxel_count_, near_;
+  std::vector<std::uint32_t> in_voxel_, voxel_count_, near_, touched_;
+  std::vector<std::uint32_t> index_;  // each endpoint's ledger index (kNone: not rated by it)
   detail::FlatIndex voxels_;
 };
 

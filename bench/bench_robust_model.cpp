@@ -10,6 +10,11 @@
 //   [--repeat N] [--cluster N]: the repeated regimes' patches re-observed by the next N keyframes
 //   instead of 4, the clustered regimes' patches N features instead of 6: how the robust model's
 //   rules hold on wrong matches unlike those its thresholds were measured on
+//
+//   build/bin/bench_robust_model --grid [--seeds N] [--patch 1,2] [--lifetime 0,4] [--prob 1]
+//     [--no-mixed] [--no-tune] [--png-dir DIR]
+//   the sensitivity grid on the report seeds (bench/quality_grid.hpp), heat maps in DIR
+//   (default build/grid); --no-tune skips the OctoMap oracle (the slowest part)
 
 #include <algorithm>
 #include <cmath>
@@ -32,6 +37,7 @@
 #include <knnocc/sim/tree_scene.hpp>
 
 #include "bench_common.hpp"
+#include "quality_grid.hpp"
 #include "robust_variants.hpp"
 
 using namespace knnocc;
@@ -132,7 +138,44 @@ void real_stereo(const std::string& dir, const std::vector<bench::RobustVariant>
 
 }  // namespace
 
+// "1,2,4" as numbers.
+template <class T>
+std::vector<T> number_list(const char* text) {
+  std::vector<T> out;
+  for (const char* p = text; *p;) {
+    char* end = nullptr;
+    const double v = std::strtod(p, &end);
+    if (end == p) break;
+    out.push_back(static_cast<T>(v));
+    p = *end == ',' ? end + 1 : end;
+  }
+  return out;
+}
+
 int main(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i)
+    if (!std::strcmp(argv[i], "--grid")) {
+      bench::GridOptions g;
+      for (int j = 1; j < argc; ++j) {
+        const bool more = j + 1 < argc;
+        if (!std::strcmp(argv[j], "--seeds") && more)
+          g.seeds = static_cast<std::size_t>(std::max(1, std::atoi(argv[++j])));
+        else if (!std::strcmp(argv[j], "--patch") && more)
+          g.patches = number_list<std::size_t>(argv[++j]);
+        else if (!std::strcmp(argv[j], "--lifetime") && more)
+          g.lifetimes = number_list<std::size_t>(argv[++j]);
+        else if (!std::strcmp(argv[j], "--prob") && more)
+          g.probabilities = number_list<double>(argv[++j]);
+        else if (!std::strcmp(argv[j], "--no-mixed"))
+          g.mixed = false;
+        else if (!std::strcmp(argv[j], "--no-tune"))
+          g.tune = false;
+        else if (!std::strcmp(argv[j], "--png-dir") && more)
+          g.png_dir = argv[++j];
+      }
+      std::printf("bench_robust_model --grid (%s build)\n", KNNOCC_BENCH_BUILD_TYPE);
+      return bench::run_grid(g);
+    }
   int seeds = 5, first_seed = 1;
   bool ablate = false;
   std::string match;

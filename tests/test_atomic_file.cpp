@@ -3,6 +3,7 @@
 
 #include <doctest/doctest.h>
 
+#include <chrono>
 #include <csignal>
 #include <filesystem>
 #include <random>
@@ -51,6 +52,33 @@ std::size_t entries(const fs::path& dir) {
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++n;
   return n;
 }
+
+#if KNNOCC_TEST_POSIX
+// Runs body(stop) in a child process; stop() tells the parent and waits for a signal to end the
+// child. Returns the child's pid once it waits, its files as body left them.
+template <class Body>
+pid_t stopped_child(Body&& body) {
+  int ready[2];
+  REQUIRE(::pipe(ready) == 0);
+  const pid_t child = ::fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    ::close(ready[0]);
+    body([&] {
+      const char go = 1;
+      if (::write(ready[1], &go, 1) != 1) ::_exit(3);
+      ::pause();
+      ::_exit(4);
+    });
+    ::_exit(5);
+  }
+  ::close(ready[1]);
+  char go = 0;
+  REQUIRE(::read(ready[0], &go, 1) == 1);
+  ::close(ready[0]);
+  return child;
+}
+#endif
 
 }  // namespace
 
@@ -216,12 +244,7 @@ TEST_CASE("io.staging_dir: built aside, renamed when complete; a non-empty folde
 TEST_CASE("io.atomic_file: SIGTERM removes the temporaries, then ends the process by the signal") {
   const fs::path d = fresh_dir("signal");
   const std::string file = (d / "out.txt").string(), folder = (d / "seq").string();
-  int ready[2];
-  REQUIRE(::pipe(ready) == 0);
-  const pid_t child = ::fork();
-  REQUIRE(child >= 0);
-  if (child == 0) {
-    ::close(ready[0]);
+  const pid_t child = stopped_child([&](auto stop) {
     io::remove_temporaries_on_signal();
     io::AtomicFile f(file);
     f.write("partial");
@@ -230,15 +253,8 @@ TEST_CASE("io.atomic_file: SIGTERM removes the temporaries, then ends the proces
     io::AtomicFile inner((fs::path(stage.path()) / "clouds" / "0.ply").string());
     inner.write("partial");
     write_text((fs::path(stage.path()) / "poses.txt").string(), "done");
-    const char go = 1;
-    if (::write(ready[1], &go, 1) != 1) ::_exit(3);
-    ::pause();  // SIGTERM arrives here
-    ::_exit(4);
-  }
-  ::close(ready[1]);
-  char go = 0;
-  REQUIRE(::read(ready[0], &go, 1) == 1);
-  ::close(ready[0]);
+    stop();  // SIGTERM arrives here
+  });
   CHECK(entries(d) == 2);  // out.txt's temporary and the staging folder
   ::kill(child, SIGTERM);
   int status = 0;
@@ -246,5 +262,48 @@ TEST_CASE("io.atomic_file: SIGTERM removes the temporaries, then ends the proces
   CHECK(WIFSIGNALED(status));
   CHECK(WTERMSIG(status) == SIGTERM);
   CHECK(entries(d) == 0);
+}
+
+TEST_CASE(
+    "io.atomic_file: a killed writer's temporary is removed on the next start, a live one's kept") {
+  const fs::path d = fresh_dir("stale");
+  const std::string target = (d / "map.ot").string();
+  // A child writes target (alone, or in a CommitGroup waiting for its rename) and stops.
+  auto writer = [&](bool pending) {
+    return stopped_child([&](auto stop) {
+      io::CommitGroup group;
+      io::AtomicFile f(target);
+      f.write("partial");
+      if (pending) f.commit();  // closed, renamed by group.commit() (never reached)
+      stop();
+    });
+  };
+  auto age = [&]() {  // every temporary a minute old: only the locks tell them apart
+    for (const auto& e : fs::directory_iterator(d))
+      fs::last_write_time(e.path(), fs::file_time_type::clock::now() - std::chrono::minutes(1));
+  };
+  auto kill = [](pid_t child) {
+    ::kill(child, SIGKILL);
+    int status = 0;
+    ::waitpid(child, &status, 0);
+  };
+  const pid_t killed = writer(false);
+  kill(killed);  // SIGKILL: no handler runs, the temporary stays
+  const pid_t writing = writer(false), waiting = writer(true);
+  write_file(d / "map.ot.tmp", "a user's file");
+  write_file(d / "map.ot.tmp-1234567", "not a temporary's name");
+  age();
+  CHECK(entries(d) == 5);
+  CHECK(io::remove_stale_temporaries(target) == 1);  // the killed writer's
+  CHECK(entries(d) == 4);
+  write_file(d / "map.ot.tmp-abcdef", "fresh, unlocked");  // too young to judge
+  CHECK(io::remove_stale_temporaries(target) == 0);
+  kill(writing);
+  kill(waiting);
+  age();
+  CHECK(io::remove_stale_temporaries(target) == 3);
+  CHECK(entries(d) == 2);
+  CHECK(fs::exists(d / "map.ot.tmp"));
+  CHECK(fs::exists(d / "map.ot.tmp-1234567"));
 }
 #endif

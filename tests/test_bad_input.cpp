@@ -1,5 +1,5 @@
-// The bad-input matrix (README "Defined behaviour on bad data"), through the public Mapper with
-// both sensor models: each row's defined behaviour, asserted.
+// The bad-input matrix (docs/reliability.md, "Defined behaviour on bad data"), through the public
+// Mapper with both sensor models: each row's defined behaviour, asserted.
 
 #include <doctest/doctest.h>
 
@@ -12,6 +12,7 @@
 #include <knnocc/io/trajectory.hpp>
 #include <knnocc/mapper.hpp>
 #include <knnocc/sensor/knn_model.hpp>
+#include <knnocc/sensor/robust_model.hpp>
 
 #include "test_support.hpp"
 
@@ -129,8 +130,9 @@ TEST_CASE("bad_input: max range 0 or NaN is rejected, negative means no limit") 
   CHECK(ks.scan.beyond_max_range == 0);
 }
 
-TEST_CASE("bad_input: resolution <= 0, NaN, Inf or absurdly small is a clear error") {
-  for (const double r : {0.0, -0.1, kNaN, kInf, 1e-7, 1e-320}) {
+TEST_CASE("bad_input: resolution <= 0, NaN, Inf, absurdly small or large is a clear error") {
+  // 1e35: 32768 voxels of it pass float's range, so no voxel centre could be a float point.
+  for (const double r : {0.0, -0.1, kNaN, kInf, 1e-7, 1e-320, 1e35, 1e308}) {
     CAPTURE(r);
     try {
       OccupancyMap<OcKey> map(r);
@@ -140,6 +142,30 @@ TEST_CASE("bad_input: resolution <= 0, NaN, Inf or absurdly small is a clear err
     }
   }
   CHECK_NOTHROW(OccupancyMap<OcKey>(1e-6));
+  CHECK_NOTHROW(OccupancyMap<OcKey>(1e34));
+  CHECK_THROWS_AS(OccupancyMap<WideKey>(1e34), std::invalid_argument);  // 64x the keys
+}
+
+TEST_CASE("bad_input: a map-point id twice in one keyframe is an error, nothing changed") {
+  const std::vector<Point3d> pts = {{1, 0, 0}, {1, 0.5, 0}, {1, 1, 0}};
+  const std::vector<std::uint64_t> twice = {7, 8, 7}, once = {7, 8, 9};
+  auto refused = [&](auto& mapper) {
+    CHECK_THROWS_WITH_AS(mapper.insert_keyframe(Point3d{0, 0, 0}, pts, twice),
+                         doctest::Contains("map-point id 7 appears twice in one keyframe"),
+                         std::invalid_argument);
+    CHECK(mapper.map().empty());
+    CHECK_NOTHROW(mapper.insert_keyframe(Point3d{0, 0, 0}, pts, once));
+  };
+  Mapper<KnnModel> knn(0.1);
+  refused(knn);
+  Mapper<RobustModel> robust(0.1);
+  refused(robust);
+  KeyframeUnion u;
+  CHECK_THROWS_WITH_AS(u.add(pts, twice), doctest::Contains("map-point id 7 appears twice"),
+                       std::invalid_argument);
+  // The OctoMap model takes no map points: it ignores ids, repeated or not.
+  Mapper<OctoMapModel> octomap(0.1);
+  CHECK(octomap.insert_keyframe(Point3d{0, 0, 0}, pts, twice).scan.points == 3);
 }
 
 TEST_CASE("bad_input: a pose quaternion off unit length is normalised (<= 1e-3) or rejected") {

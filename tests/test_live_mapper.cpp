@@ -274,8 +274,12 @@ TEST_CASE("live_mapper.bad_operations_change_nothing") {
   const std::size_t voxels = live.map().num_voxels();
   CHECK_THROWS_AS(live.add(1, a.pose, a.points, a.ids), std::invalid_argument);  // id again
   CHECK_THROWS_AS(live.add(2, b.pose, b.points, b.ids), std::invalid_argument);  // ids mixed
-  CHECK_THROWS_AS(live.repose({{7, a.pose}}), std::invalid_argument);            // unknown id
-  CHECK_THROWS_AS(live.remove({1, 7}), std::invalid_argument);                   // unknown id
+  Frame twice = a;
+  twice.ids.back() = twice.ids.front();  // one map point observed twice by one keyframe
+  CHECK_THROWS_WITH_AS(live.add(3, twice.pose, twice.points, twice.ids),
+                       doctest::Contains("appears twice in one keyframe"), std::invalid_argument);
+  CHECK_THROWS_AS(live.repose({{7, a.pose}}), std::invalid_argument);  // unknown id
+  CHECK_THROWS_AS(live.remove({1, 7}), std::invalid_argument);         // unknown id
   RigidPose nan_pose = a.pose;
   nan_pose.t[0] = std::nan("");
   CHECK_THROWS_AS(live.repose({{1, nan_pose}}), std::invalid_argument);
@@ -356,4 +360,46 @@ TEST_CASE("live_mapper.recent_repose_replays_only_nearby_keyframes") {
   CHECK(live.last_update().changed == 2);
   CHECK(live.size() == 98);
   check_against_scratch(live, OctoMapModel{}, MapperOptions{}, 0.1);
+}
+
+TEST_CASE_TEMPLATE("live_mapper.point_counts_are_a_from_scratch_mappers", Model, OctoMapModel,
+                   KnnModel) {
+  // A correction moves keyframe 2 4 km away: at 0.1 m (+-3.3 km of keys) its points leave the
+  // map, and the counts are those of a Mapper fed the keyframes at their new poses.
+  test::Rng rng(11);
+  const Scene scene(rng, 8.0);
+  const MapperOptions options{2.5, false, 1, {}};
+  LiveMapper<Model> live(0.1, Model{}, options);
+  std::vector<Frame> frames;
+  for (int f = 0; f < 4; ++f) {
+    frames.push_back(make_frame(rng, scene, f, true));
+    frames.back().points.push_back({std::nanf(""), 0.f, 0.f});  // one NaN point each
+    frames.back().ids.push_back(900000 + f);
+    live.add(f, frames.back().pose, frames.back().points, frames.back().ids);
+  }
+  const RigidPose far = RigidPose::yaw(0.1, 4000.0, 0.0, 0.8);
+  live.repose({{2, far}});
+  Mapper<Model> scratch(0.1, Model{}, options);
+  ScanStats want;
+  std::vector<Point3d> world;
+  for (int f = 0; f < 4; ++f) {
+    const RigidPose& pose = f == 2 ? far : frames[f].pose;
+    world.clear();
+    for (const Point3f& p : frames[f].points)
+      world.push_back(pose_traits<RigidPose>::to_world(pose, p));
+    const ScanStats s =
+        scratch.insert_keyframe(pose_traits<RigidPose>::origin(pose), world, frames[f].ids).scan;
+    want.points += s.points;
+    want.nonfinite += s.nonfinite;
+    want.out_of_range += s.out_of_range;
+    want.beyond_max_range += s.beyond_max_range;
+  }
+  const ScanStats got = live.point_counts();
+  CHECK(got.points == want.points);
+  CHECK(got.nonfinite == 4);
+  CHECK(got.nonfinite == want.nonfinite);
+  CHECK(got.out_of_range == want.out_of_range);
+  CHECK(got.out_of_range > 0);
+  CHECK(got.beyond_max_range == want.beyond_max_range);
+  CHECK(got.beyond_max_range > 0);
 }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <knnocc/insertion/scan_inserter.hpp>
+#include <knnocc/map/detail/brick_access.hpp>
 #include <knnocc/map/occupancy_map.hpp>
 
 #include "test_support.hpp"
@@ -238,17 +239,18 @@ TEST_CASE("map.copy_brick_from_makes_a_brick_equal") {
   b.update(far, 0.85f);
   const std::uint64_t brick = Layout::brick_of(k1);
   REQUIRE(Layout::brick_of(k2) == brick);
-  a.copy_brick_from(b, brick);  // a's brick now holds b's voxels only
+  knnocc::detail::BrickWriter<OcKey> writer(a);  // the live mapper's regional replay
+  writer.copy_brick_from(b, brick);              // a's brick now holds b's voxels only
   CHECK_FALSE(a.is_known(k1));
   CHECK(a.logodds(k2) == b.logodds(k2));
   CHECK(a.logodds(far) == -0.4f);  // other bricks untouched
   CHECK(a.num_voxels() == 2);
   const OccupancyMap<OcKey> empty(0.1);
-  a.copy_brick_from(empty, brick);  // absent in the source: unknown here
+  writer.copy_brick_from(empty, brick);  // absent in the source: unknown here
   CHECK_FALSE(a.is_known(k2));
   CHECK(a.num_voxels() == 1);
   b.compact();  // a uniform brick (no value array) copies too
-  a.copy_brick_from(b, brick);
+  writer.copy_brick_from(b, brick);
   CHECK(a.logodds(k2) == b.logodds(k2));
   CHECK(a.num_voxels() == 2);
   std::size_t seen = 0;

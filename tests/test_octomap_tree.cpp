@@ -154,6 +154,31 @@ TEST_CASE("octomap_tree.round trips of a mixed map") {
   CHECK(info.occupied_voxels + info.free_voxels == map.num_voxels());
 }
 
+TEST_CASE("octomap_tree.a note rides in a header comment and reads back") {
+  const OccupancyMap<OcKey> map = mixed_map(3);
+  const std::string note = "map: clouds 0 to 4 of seq\n\x1b;";
+  const std::string bt = tree_file("note.bt"), ot = tree_file("note.ot");
+  io::write_bt(bt, map, note);
+  io::write_ot(ot, map, note);
+  for (const std::string& path : {bt, ot}) {
+    CAPTURE(path);
+    const std::string bytes = read_file(path);
+    // One comment line after OctoMap's, control bytes escaped: the header stays a header.
+    CHECK(bytes.find("#\n# knnocc map: clouds 0 to 4 of seq\\x0a\\x1b;\nid OcTree\n") !=
+          std::string::npos);
+    CHECK(io::inspect_octree(path).note == "map: clouds 0 to 4 of seq\\x0a\\x1b;");
+    CHECK(io::read_octree(path).num_voxels() == map.num_voxels());
+  }
+  // Without the comment the bytes are the note-free encoding's.
+  std::string plain = read_file(ot);
+  const std::size_t at = plain.find("# knnocc");
+  plain.erase(at, plain.find('\n', at) + 1 - at);
+  CHECK(plain == io::encode_ot(map));
+  check_same_voxels(map, io::read_octree(ot));
+  write_file(tree_file("no_note.ot"), plain);
+  CHECK(io::inspect_octree(tree_file("no_note.ot")).note.empty());
+}
+
 TEST_CASE("octomap_tree.empty map") {
   const OccupancyMap<OcKey> empty(0.1);
   const std::string bt = io::encode_bt(empty);
@@ -201,6 +226,16 @@ TEST_CASE("octomap_tree.malformed files throw io::Error naming the file") {
   expect_error("no_res.ot", replace(good_ot, "res 0.05\n", ""), "no 'res' line");
   expect_error("zero_res.bt", replace(good_bt, "res 0.05", "res 0"), "invalid resolution");
   expect_error("nan_res.bt", replace(good_bt, "res 0.05", "res nan"), "invalid resolution");
+  // Finite, but a map cannot hold it: voxel centres would overflow float (a page of -inf, a
+  // PLY of inf points), or the voxels are below the 1e-6 m a Grid takes.
+  expect_error("huge_res.bt", replace(good_bt, "res 0.05", "res 1e308"),
+               "resolution 1e+308 is above 1.03846e+34 m: the key range");
+  expect_error("huge_res.ot", replace(good_ot, "res 0.05", "res 2e34"), "the key range");
+  expect_error("tiny_res.bt", replace(good_bt, "res 0.05", "res 1e-9"),
+               "resolution 1e-09 is below 1e-06 m");
+  // A control byte or a NUL in a header word is shown escaped, and the message goes on.
+  expect_error("escape_id.ot", replace(good_ot, "id OcTree", std::string("id Oc\x1b[2J\0Tree", 14)),
+               "'Oc\\x1b[2J\\x00Tree'");
   expect_error("text_size.bt", replace(good_bt, "size ", "size x"), "invalid node count");
   expect_error("huge_size.bt", replace(good_bt, "size ", "size 9"), "but the tree has");
   expect_error("bad_id.ot", replace(good_ot, "id OcTree", "id CountingOcTree"),
@@ -326,6 +361,20 @@ TEST_CASE("octomap_tree.liboctomap writes the same bytes and reads ours (scan.da
     CHECK(t.getNumLeafNodes() > 0);
     check_octomap_sees(t, map, false);
   }
+}
+
+TEST_CASE("octomap_tree.liboctomap skips the note's comment line") {
+  const OccupancyMap<OcKey> map = mixed_map(4);
+  const std::string bt = tree_file("note_octomap.bt"), ot = tree_file("note_octomap.ot");
+  io::write_bt(bt, map, "map: clouds 0 to 9 of seq; continue with --first 10");
+  io::write_ot(ot, map, "map: clouds 0 to 9 of seq; continue with --first 10");
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(ot));
+  auto* t = dynamic_cast<octomap::OcTree*>(read.get());
+  REQUIRE(t != nullptr);
+  check_octomap_sees(*t, map, true);
+  octomap::OcTree b(0.05);
+  REQUIRE(b.readBinary(bt));
+  check_octomap_sees(b, map, false);
 }
 
 TEST_CASE("octomap_tree.liboctomap agrees on mixed maps, pruning included") {

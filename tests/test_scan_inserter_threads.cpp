@@ -16,6 +16,7 @@
 #include <vector>
 
 #include <knnocc/insertion/scan_inserter.hpp>
+#include <knnocc/map/detail/brick_access.hpp>
 
 #include "test_support.hpp"
 
@@ -224,7 +225,8 @@ TEST_CASE("insert_threads.sparse_rays_leave_uniform_bricks") {
     inserter.set_scratch_limit(limit);
     inserter.insert_point_cloud(scans[0].origin, scans[0].points);
     std::size_t uniform = 0;
-    for (const auto& b : map.bricks()) uniform += b.values == nullptr && b.known.any();
+    for (const auto& b : knnocc::detail::brick_reader(map).bricks())
+      uniform += b.values == nullptr && b.known.any();
     CHECK(uniform > map.num_bricks() / 2);
     if (limit == 0) {
       // The hashed scratch is applied in place: 8 bytes per touched brick (its order and map
@@ -235,7 +237,7 @@ TEST_CASE("insert_threads.sparse_rays_leave_uniform_bricks") {
       CHECK(used.brick_groups <= 4 * sizeof(std::uint32_t) * map.num_bricks());
     }
     for (const std::uint64_t coord : solid) {
-      const auto* b = map.find_brick(coord);
+      const auto* b = knnocc::detail::brick_reader(map).find_brick(coord);
       REQUIRE(b != nullptr);
       CHECK(b->values == nullptr);
       CHECK(b->known.count() == knnocc::kBrickVoxels);

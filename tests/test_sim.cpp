@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <map>
+#include <set>
+#include <utility>
 
 #include <knnocc/eval/metrics.hpp>
 #include <knnocc/mapper.hpp>
@@ -137,6 +139,50 @@ TEST_CASE("sim: clustered, repeated and depth-dependent wrong matches") {
   e.repeat_prob = 0.5;  // only used with outlier_repeat > 0
   const auto a = sim::TreeScene(d).keyframes(), b = sim::TreeScene(e).keyframes();
   for (std::size_t i = 0; i < a.size(); ++i) CHECK(same(a[i].cloud.points, b[i].cloud.points));
+}
+
+TEST_CASE("sim: random_patches draws each patch's size and lifetime up to the maxima") {
+  auto run = [](bool random) {
+    sim::TreeSceneParams p;
+    p.keyframes = 60;
+    p.outlier_cluster = 8;
+    p.outlier_repeat = 12;
+    p.outliers = 0.1;
+    p.random_patches = random;
+    std::map<std::uint64_t, std::pair<std::size_t, std::size_t>> span;  // id -> first, last
+    std::size_t created = 0, patches = 0, observations = 0;
+    const auto kfs = sim::TreeScene(p).keyframes();
+    for (std::size_t i = 0; i < kfs.size(); ++i) {
+      patches += kfs[i].patches;
+      for (const std::uint64_t id : kfs[i].cloud.ids) {
+        if (id < sim::TreeScene::kOutlierIdBase) {
+          ++observations;
+          continue;
+        }
+        auto [it, fresh] = span.try_emplace(id, i, i);
+        it->second.second = i;
+        created += fresh;
+        observations += fresh;
+      }
+    }
+    std::set<std::size_t> spans;
+    for (const auto& e : span) spans.insert(e.second.second - e.second.first);
+    struct R {
+      double mean_size, wrong_fraction;
+      std::set<std::size_t> spans;
+    };
+    return R{double(created) / double(patches), double(created) / double(observations), spans};
+  };
+  const auto fixed = run(false), random = run(true);
+  CHECK(fixed.mean_size == 8.0);
+  CHECK(random.mean_size > 3.0);  // uniform over 1..8: 4.5
+  CHECK(random.mean_size < 6.0);
+  // The rate is divided by the mean size: `outliers` stays the fraction of wrong points.
+  CHECK(random.wrong_fraction == doctest::Approx(0.1).epsilon(0.3));
+  CHECK(fixed.wrong_fraction == doctest::Approx(0.1).epsilon(0.3));
+  CHECK(*random.spans.rbegin() <= 12);
+  CHECK(random.spans.size() >= 8);  // lifetimes drawn from 0..12
+  CHECK(*fixed.spans.rbegin() <= 12);
 }
 
 TEST_CASE("sim: outliers grow with depth with outlier_depth_gain") {

@@ -107,3 +107,41 @@ TEST_CASE("io.poses parsing, quaternion order and transforms") {
   check_bad("long.txt", "0 0 0 0 0 0 0 1 5\n", "line 1: expected 8 numbers");
   check_bad("word.txt", "0 0 0 zero 0 0 0 1\n", "line 1: cannot parse 'zero'");
 }
+
+TEST_CASE("trajectory.read_trajectory stops at the first pose beyond max_poses") {
+  ScratchDir dir("trajectory_max");
+  const std::string p = dir.file("after_000002.txt");
+  // Three poses, then a fourth and 2 MB of poses after it: the read ends at line 5.
+  std::string text = "# stamp tx ty tz qx qy qz qw\n0 0 0 0 0 0 0 1\n\n1 1 0 0 0 0 0 1\n";
+  text += "2 2 0 0 0 0 0 1\n3 3 0 0 0 0 0 1\n";
+  for (int i = 0; i < 100000; ++i) text += "4 4 0 0 0 0 0 1 # and more, unread\n";
+  write_bytes(p, text);
+  std::vector<std::size_t> lines;
+  CHECK(io::read_trajectory(p).size() == 100004);
+  const std::string msg = error_of([&] { io::read_trajectory(p, 3, &lines); });
+  CHECK(contains(msg, p + ": line 6: more poses than the 3 expected"));
+  write_bytes(p, text.substr(0, text.find("3 3")));
+  const auto poses = io::read_trajectory(p, 3, &lines);
+  REQUIRE(poses.size() == 3);
+  CHECK(lines == std::vector<std::size_t>{2, 4, 5});
+  CHECK(poses[2].t.x() == 2.0);
+  // KITTI lines: stamp = row index, the limit the same.
+  write_bytes(p, "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 0\n");
+  CHECK(io::read_trajectory(p, 2).back().stamp == 1.0);
+  CHECK(contains(error_of([&] { io::read_trajectory(p, 1); }), "line 2: more poses than the 1"));
+  // A line of 2 MB (no newline): refused without holding the file, not read as one pose.
+  write_bytes(p, "0 0 0 0 0 0 0 1\n" + std::string(2u << 20, '7'));
+  CHECK(contains(error_of([&] { io::read_trajectory(p); }), "line 2 is longer than 1 MiB"));
+  // Read piece by piece, the same poses as read whole (lines across the 1 MiB pieces, CRLF, BOM).
+  std::string many = "\xEF\xBB\xBF";
+  for (int i = 0; i < 60000; ++i)
+    many += std::to_string(i) + " " + std::to_string(0.25 * i) + " 2 3 0 0 0 1\r\n";
+  write_bytes(p, many);
+  const auto whole = io::read_poses(p), pieces = io::read_trajectory(p);
+  REQUIRE(pieces.size() == 60000);
+  REQUIRE(whole.size() == 60000);
+  for (std::size_t i = 0; i < whole.size(); i += 997) {
+    CHECK(pieces[i].stamp == whole[i].stamp);
+    CHECK(pieces[i].t == whole[i].t);
+  }
+}

@@ -5,9 +5,12 @@
 
 #include <doctest/doctest.h>
 
+#include <array>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "test_support.hpp"
 
@@ -68,18 +71,23 @@ Seen look(const test::RgbImage& img) {
   return s;
 }
 
+// Chromium, or "" after test::skip() says why a page cannot be opened.
+std::string browser_for_pages() {
+  const std::string chromium = test::find_chromium();
+  if (chromium.empty())
+    test::skip("no Chromium (chromium, chromium-browser, google-chrome or KNNOCC_CHROMIUM)");
+  else if (!cli::view_pages_available())
+    test::skip("the tool was built without three.js (libjs-three)");
+  else
+    return chromium;
+  return {};
+}
+
 }  // namespace
 
 TEST_CASE("view_page.headless chromium draws the map upright") {
-  const std::string chromium = test::find_chromium();
-  if (chromium.empty()) {
-    test::skip("no Chromium (chromium, chromium-browser, google-chrome or KNNOCC_CHROMIUM)");
-    return;
-  }
-  if (!cli::view_pages_available()) {
-    test::skip("the tool was built without three.js (libjs-three)");
-    return;
-  }
+  const std::string chromium = browser_for_pages();
+  if (chromium.empty()) return;
   const std::filesystem::path dir = std::filesystem::path(KNNOCC_BINARY_DIR) / "view_page_test";
   std::filesystem::create_directories(dir);
   for (const char* up_name : {"z", "-y"}) {
@@ -108,6 +116,111 @@ TEST_CASE("view_page.headless chromium draws the map upright") {
     CHECK(s.blue > 5000);       // the floor
     CHECK(s.red_y < s.blue_y);  // high above low: up is up on the screen
   }
+}
+
+namespace {
+
+std::string hex(const std::array<std::uint8_t, 32>& d) {
+  std::string s;
+  char b[3];
+  for (const std::uint8_t v : d) {
+    std::snprintf(b, sizeof b, "%02x", v);
+    s += b;
+  }
+  return s;
+}
+
+// Map names a user or a file name could hold: markup with handlers, a script, an entity.
+const char* const kHostileNames[] = {"<img src=x onerror=\"document.body.dataset.pwned='img'\">.bt",
+                                     "<script>document.body.dataset.pwned='script'</script>",
+                                     "&lt;b&gt; & \"quotes\" 'too'"};
+
+}  // namespace
+
+TEST_CASE("view_page.sha256 of known messages") {
+  CHECK(hex(cli::detail::sha256("")) ==
+        "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  CHECK(hex(cli::detail::sha256("abc")) ==
+        "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  CHECK(hex(cli::detail::sha256("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq")) ==
+        "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  CHECK(hex(cli::detail::sha256(std::string(1000000, 'a'))) ==
+        "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+}
+
+TEST_CASE("view_page.the policy lists the hash of each of the page's scripts, and only those") {
+  OccupancyMap<OcKey> map(0.1);
+  map.set(OcKey(32768, 32768, 32768), 2.0f);
+  const std::string html = cli::view_page_html({{kHostileNames[0], &map}, {kHostileNames[1], &map}},
+                                               cli::UpAxis{}, cli::ViewOptions{});
+  const std::size_t csp = html.find("<meta http-equiv=\"Content-Security-Policy\" content=\"");
+  REQUIRE(csp != std::string::npos);
+  CHECK(csp < html.find("<script>"));  // before any script: it governs them all
+  const std::string policy = html.substr(csp, html.find('>', csp) - csp);
+  CHECK(policy.find("default-src 'none'") != std::string::npos);
+  CHECK(policy.find("style-src 'unsafe-inline'") != std::string::npos);
+  CHECK(policy.find("'unsafe-inline'") == policy.rfind("'unsafe-inline'"));  // styles only
+  std::size_t scripts = 0;
+  for (std::size_t p = html.find("<script>"); p != std::string::npos;
+       p = html.find("<script>", p + 1)) {
+    const std::size_t body = p + 8, end = html.find("</script>", body);
+    REQUIRE(end != std::string::npos);
+    const auto d = cli::detail::sha256(html.substr(body, end - body));
+    CHECK(policy.find("'sha256-" + cli::detail::base64(std::string(d.begin(), d.end())) + "'") !=
+          std::string::npos);
+    ++scripts;
+  }
+  CHECK(scripts == (cli::view_pages_available() ? 3u : 2u));
+  std::size_t hashes = 0;
+  for (std::size_t p = policy.find("'sha256-"); p != std::string::npos;
+       p = policy.find("'sha256-", p + 1))
+    ++hashes;
+  CHECK(hashes == scripts);
+  // The names reach the page only inside the JSON, with '<' escaped: no markup of theirs.
+  CHECK(html.find("<img") == std::string::npos);
+  CHECK(html.find("<script>document") == std::string::npos);
+}
+
+TEST_CASE("view_page.headless chromium shows hostile names as text and runs no script of theirs") {
+  const std::string chromium = browser_for_pages();
+  if (chromium.empty()) return;
+  const std::filesystem::path dir = std::filesystem::path(KNNOCC_BINARY_DIR) / "view_page_test";
+  std::filesystem::create_directories(dir);
+  const OccupancyMap<OcKey> map = floor_and_pillar(cli::UpAxis{});
+  std::vector<cli::ViewMap> maps;
+  for (const char* name : kHostileNames) maps.push_back({name, &map});
+  const std::string page = (dir / "hostile_names.html").string(),
+                    shot = (dir / "hostile_names.png").string();
+  // Every map shown first in turn (page.html#N): its name goes into the info line.
+  for (std::size_t first = 0; first < maps.size(); ++first) {
+    CAPTURE(first);
+    cli::write_view_page(page, maps, cli::UpAxis{}, cli::ViewOptions{});
+    const test::BrowserRun run =
+        test::run_chromium(chromium, page + "#" + std::to_string(first), first ? "" : shot);
+    REQUIRE(run.status == 0);
+    CHECK(test::drawn_ms(run.dom) > 0);  // three.js and the page's script ran under the policy
+    CHECK(run.dom.find("data-pwned") == std::string::npos);  // no handler, no script of a name
+    CHECK(run.dom.find("<img") == std::string::npos);        // no element made from a name
+    // The names as text: on the buttons, and the one shown in bold in the info line.
+    const std::string text = first == 0   ? "&lt;img src=x onerror=\"document.body."
+                             : first == 1 ? "&lt;script&gt;document.body."
+                                          : "&amp;lt;b&amp;gt; &amp; \"quotes\" 'too'";
+    CHECK(run.dom.find("<button class=\"on\">" + text) != std::string::npos);
+    CHECK(run.dom.find("<div id=\"info\"><b>" + text) != std::string::npos);
+  }
+  // The policy itself: markup smuggled into the page (as an innerHTML would have made it) runs
+  // nothing, while the page's own scripts still draw.
+  std::string html = cli::view_page_html(maps, cli::UpAxis{}, cli::ViewOptions{});
+  html.insert(html.rfind("</body>"),
+              "<img src=x onerror=\"document.body.dataset.pwned='handler'\">"
+              "<script>document.body.dataset.pwned='inline'</script>");
+  const std::string injected = (dir / "injected.html").string();
+  knnocc::test::write_file(injected, html);
+  const test::BrowserRun run = test::run_chromium(chromium, injected, "");
+  REQUIRE(run.status == 0);
+  CHECK(test::drawn_ms(run.dom) > 0);
+  CHECK(run.dom.find("data-pwned") == std::string::npos);
+  CHECK(run.dom.find("<img src=\"x\"") != std::string::npos);  // there, and inert
 }
 
 #else

@@ -3,22 +3,22 @@
 // corrects its keyframes (LiveMapper, include/knnocc/live/live_mapper.hpp).
 //
 // DIR holds pose snapshots after_NNNNNN.txt: the trajectory of keyframes 0..NNNNNN (one line
-// each, the format of poses.txt) as the SLAM system knew it after keyframe NNNNNN. A snapshot is
-// applied right after its keyframe is inserted: every keyframe whose pose differs is re-posed at
-// once. Keyframes without a newer snapshot keep the pose of poses.txt. The final map equals the
-// map of the same folder with each keyframe's last pose in poses.txt (docs/live_mapping.md).
+// each, the format of poses.txt) as the SLAM system knew it after keyframe NNNNNN, read and checked
+// against poses.txt by io::read_corrections (io/corrections.hpp). A snapshot is applied right after
+// its keyframe is inserted: every keyframe whose pose differs is re-posed at once. Keyframes
+// without a newer snapshot keep the pose of poses.txt. The final map equals the map of the same
+// folder with each keyframe's last pose in poses.txt (docs/live_mapping.md).
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <map>
 #include <new>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include <knnocc/io/corrections.hpp>
 #include <knnocc/io/error.hpp>
 #include <knnocc/io/scan_source.hpp>
 #include <knnocc/io/sequence.hpp>
@@ -34,34 +34,26 @@
 
 namespace knnocc::cli {
 
-/// DIR's snapshots by keyframe index; io::Error for a file that does not fit `keyframes`.
-inline std::map<std::size_t, std::vector<io::Pose>> read_corrections(const std::string& dir,
-                                                                     std::size_t keyframes) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw io::Error(dir, "not a folder of after_NNNNNN.txt files");
-  std::map<std::size_t, std::vector<io::Pose>> out;
-  for (const auto& e : fs::directory_iterator(dir, ec)) {
-    const std::string name = e.path().filename().string();
-    if (name.rfind("after_", 0) != 0 || e.path().extension() != ".txt") continue;
-    const std::string digits = name.substr(6, name.size() - 10);
-    if (digits.empty() || digits.size() > 9 ||
-        !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
-      throw io::Error(e.path().string(), "expected after_NNNNNN.txt (NNNNNN: keyframe index)");
-    const std::size_t after = std::stoul(digits);
-    if (after >= keyframes)
-      throw io::Error(e.path().string(), "keyframe " + std::to_string(after) +
-                                             " does not exist (the sequence has " +
-                                             std::to_string(keyframes) + ")");
-    std::vector<io::Pose> poses = io::read_trajectory(e.path().string());
-    if (poses.size() != after + 1)
-      throw io::Error(e.path().string(), "expected " + std::to_string(after + 1) +
-                                             " poses (keyframes 0.." + std::to_string(after) +
-                                             "), found " + std::to_string(poses.size()));
-    out.emplace(after, std::move(poses));
-  }
-  if (ec) throw io::Error(dir, ec.message());
-  return out;
+/// --crop: drops the points (and their ids, when there are any) farther than `crop` from the
+/// sensor, in the sensor frame; crop <= 0 keeps all.
+inline void crop_points(std::vector<Point3f>& pts, std::vector<std::uint64_t>& ids, double crop) {
+  if (!(crop > 0.0)) return;
+  std::size_t kept = 0;
+  for (std::size_t j = 0; j < pts.size(); ++j)
+    if (std::sqrt(double(pts[j].x) * pts[j].x + double(pts[j].y) * pts[j].y +
+                  double(pts[j].z) * pts[j].z) <= crop) {
+      if (!ids.empty()) ids[kept] = ids[j];
+      pts[kept++] = pts[j];
+    }
+  pts.resize(kept);
+  if (!ids.empty()) ids.resize(kept);
+}
+
+/// The corrections line: how many snapshots, the keyframes they re-posed, their times.
+inline void print_corrections(std::vector<double>& ms, std::size_t reposed) {
+  std::sort(ms.begin(), ms.end());
+  std::printf("corrections %zu reposed_keyframes %zu median_ms %.3f max_ms %.3f\n", ms.size(),
+              reposed, ms.empty() ? 0.0 : ms[ms.size() / 2], ms.empty() ? 0.0 : ms.back());
 }
 
 /// `knnocc map` with --corrections; opt: map_command.hpp's MapOptions.
@@ -74,7 +66,7 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
   if (!io::is_sequence_dir(input))
     throw io::Error(input, "--corrections needs a sequence folder (poses.txt + clouds/)");
   const io::ScanSource source = io::ScanSource::open(input);
-  const auto corrections = read_corrections(dir, source.size());
+  const auto corrections = io::read_corrections(dir, source.sequence()->poses());
   LiveMapper<Model, OcKey, EigenPose> live(
       opt.res, model, MapperOptions{opt.max_range, opt.discretize, opt.threads, {}});
   live.set_memory_limit(map_memory_share(opt.memory_limit));  // rebuilds and replays included
@@ -91,29 +83,20 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
       up_estimate.add(scan.pose, scan.cloud.points);
       std::vector<Point3f>& pts = scan.cloud.points;
       std::vector<std::uint64_t>& ids = scan.cloud.ids;
-      if (crop > 0.0) {  // --crop: in the sensor frame, as the from-scratch path
-        std::size_t kept = 0;
-        for (std::size_t j = 0; j < pts.size(); ++j)
-          if (std::sqrt(double(pts[j].x) * pts[j].x + double(pts[j].y) * pts[j].y +
-                        double(pts[j].z) * pts[j].z) <= crop) {
-            if (!ids.empty()) ids[kept] = ids[j];
-            pts[kept++] = pts[j];
-          }
-        pts.resize(kept);
-        if (!ids.empty()) ids.resize(kept);
-      }
+      crop_points(pts, ids, crop);  // as the from-scratch path
       points += pts.size();
       try {
         live.add(i, EigenPose::from(scan.pose), std::move(pts), std::move(ids));
       } catch (const std::invalid_argument& e) {
-        throw io::Error(source.path(), "scan " + std::to_string(i) + ": " + e.what());
+        throw io::Error(source.sequence()->cloud_path(i), e.what());
       }
       const auto snapshot = corrections.find(i);
       if (snapshot == corrections.end()) continue;
       const auto a = std::chrono::steady_clock::now();
       std::vector<std::pair<std::uint64_t, EigenPose>> poses;
-      for (std::size_t j = 0; j < snapshot->second.size(); ++j)
-        poses.emplace_back(j, EigenPose::from(snapshot->second[j]));
+      for (std::size_t j = 0; j < snapshot->second.size(); ++j)  // as poses.txt's rows
+        poses.emplace_back(j,
+                           EigenPose::from(source.sequence()->scanner_pose(snapshot->second[j])));
       live.repose(poses);
       reposed += live.last_update().changed;
       correction_ms.push_back(
@@ -122,12 +105,12 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
       throw out_of_memory(i);
     }
   const auto& map = live.map();
+  const ScanStats skipped = live.point_counts();  // at the final poses, as plain `map` counts
+  note_skipped_points(input, skipped.nonfinite, skipped.out_of_range, map.grid().max_coord());
+  note_empty_map(input, source.size(), points, map, model);
   std::vector<std::string> written;
   if (!out_voxels.empty()) {
-    const io::VoxelSelection sel = which == "all"        ? io::VoxelSelection::all
-                                   : which == "occupied" ? io::VoxelSelection::occupied
-                                                         : io::VoxelSelection::free;
-    io::write_voxel_list(out_voxels, io::voxel_records(map, sel));
+    io::write_voxel_list(out_voxels, io::voxel_records(map, voxel_selection(which)));
     written.push_back(out_voxels);
   }
   write_map_outputs(map, args, up_axis(args, up_estimate.result()), model_title(model), written);
@@ -136,11 +119,7 @@ int run_map_corrections(const Args& args, const MapOptions& opt, const Model& mo
     std::printf("knn k %zu map_points %zu valid %zu mu %.6f sigma %.6f\n", tr.params().k, tr.size(),
                 tr.N(), tr.mu(), tr.sigma());
   }
-  std::sort(correction_ms.begin(), correction_ms.end());
-  std::printf("corrections %zu reposed_keyframes %zu median_ms %.3f max_ms %.3f\n",
-              correction_ms.size(), reposed,
-              correction_ms.empty() ? 0.0 : correction_ms[correction_ms.size() / 2],
-              correction_ms.empty() ? 0.0 : correction_ms.back());
+  print_corrections(correction_ms, reposed);
   const auto counts = map.count_voxels();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

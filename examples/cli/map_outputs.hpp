@@ -6,8 +6,8 @@
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
-#include <set>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <knnocc/io/octomap_tree.hpp>
@@ -22,37 +22,6 @@
 #include "view_page.hpp"
 
 namespace knnocc::cli {
-
-/// Options of write_map_outputs(), for Args: valued options and flags.
-inline std::set<std::string> map_output_options() {
-  return {"--out-bt", "--out-ot", "--out-ply", "--out-png", "--out-html", "--up"};
-}
-inline std::set<std::string> map_output_flags() { return {"--ply-cubes", "--ply-free"}; }
-
-inline std::set<std::string> with_map_outputs(std::set<std::string> options) {
-  for (const auto& o : map_output_options()) options.insert(o);
-  return options;
-}
-inline std::set<std::string> with_map_output_flags(std::set<std::string> flags) {
-  for (const auto& f : map_output_flags()) flags.insert(f);
-  return flags;
-}
-
-inline const char* map_outputs_help() {
-  return R"(  --out-bt FILE         OctoMap binary tree (.bt) for octovis / octomap_server: occupied or
-                        free per voxel, pruned as OctoMap prunes
-  --out-ot FILE         OctoMap full tree (.ot): log-odds per node
-  --out-ply FILE        occupied voxel centres as a PLY point cloud (colour = height,
-                        property logodds) for CloudCompare / MeshLab
-  --ply-cubes           --out-ply writes one cube (8 vertices, 6 faces) per voxel instead
-  --ply-free            --out-ply includes free voxels (light grey)
-  --out-png FILE        a picture: top view (colour = height) above a side view, with legend,
-                        scale bar and title (zlib-compressed PNG)
-  --out-html FILE       the map in 3D in one self-contained web page (see knnocc view --help)
-  --up AXIS             which way is up in pictures and pages: x, y, z, -x, -y or -z
-                        (default: from the sensor poses, camera -y / LiDAR +z; z for map files)
-)";
-}
 
 inline std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
@@ -76,10 +45,46 @@ inline void check_map_outputs(const Args& args) {
     throw UsageError("--ply-cubes and --ply-free need --out-ply");
 }
 
-/// --up if given, else `estimated`.
+/// --voxels / --out-voxels' selection by name: occupied, free or all.
+inline io::VoxelSelection voxel_selection(const std::string& which) {
+  return which == "occupied" ? io::VoxelSelection::occupied
+         : which == "free"   ? io::VoxelSelection::free
+                             : io::VoxelSelection::all;
+}
+
+/// The model's name in titles and pictures.
 inline const char* model_title(const OctoMapModel&) { return "OctoMap model"; }
 inline const char* model_title(const KnnModel&) { return "k-NN model"; }
 inline const char* model_title(const RobustModel&) { return "robust model"; }
+
+/// The notes (stderr) on points a map holds no update from: NaN/Inf coordinates, points outside
+/// the key range (|c| >= max_coord), e.g. moved there by a correction.
+inline void note_skipped_points(const std::string& input, std::size_t nonfinite,
+                                std::size_t out_of_range, double max_coord) {
+  if (nonfinite)
+    std::fprintf(stderr, "knnocc map: %s: skipped %zu points with NaN/Inf coordinates\n",
+                 input.c_str(), nonfinite);
+  if (out_of_range)
+    std::fprintf(stderr,
+                 "knnocc map: %s: skipped %zu points outside the map's key range (|c| >= %g m at "
+                 "--res %g); use a coarser --res (the library's WideKey maps reach 64x farther)\n",
+                 input.c_str(), out_of_range, max_coord, max_coord / 32768.0);
+}
+
+/// A warning (stderr) when clouds were read and the map holds no voxel: never silent.
+template <class Model>
+void note_empty_map(const std::string& input, std::size_t clouds, std::size_t points,
+                    const OccupancyMap<OcKey>& map, const Model&) {
+  if (clouds == 0 || map.count_voxels().known() > 0) return;
+  const char* why = std::is_same_v<Model, RobustModel>
+                        ? "; the robust model adds a map point's evidence only while it believes "
+                          "the point real (docs/robust_model.md)"
+                        : "";
+  std::fprintf(stderr,
+               "knnocc map: %s: warning: the map is empty: the %zu points of %zu clouds updated no "
+               "voxel%s\n",
+               input.c_str(), points, clouds, why);
+}
 
 /// Prints `wrote A, B, ...` (nothing when no file was written).
 inline void print_written(const std::vector<std::string>& written) {
@@ -89,21 +94,24 @@ inline void print_written(const std::vector<std::string>& written) {
   std::printf("%s\n", line.c_str());
 }
 
+/// --up if given, else `estimated`.
 inline UpAxis up_axis(const Args& args, UpAxis estimated = {}) {
   return args.has("--up") ? parse_up_axis(args.str("--up")) : estimated;
 }
 
 /// Writes every requested output (each atomically; io::Error names the file on failure) and
-/// adds its name to `written`. `title` names the map in pictures and pages.
+/// adds its name to `written`. `title` names the map in pictures and pages; `note` goes into the
+/// .bt/.ot headers (io::encode_bt).
 inline void write_map_outputs(const OccupancyMap<OcKey>& map, const Args& args, UpAxis up,
-                              const std::string& title, std::vector<std::string>& written) {
+                              const std::string& title, std::vector<std::string>& written,
+                              const std::string& note = {}) {
   auto done = [&](const char* flag) { written.push_back(args.str(flag)); };
   if (args.has("--out-bt")) {
-    io::write_bt(args.str("--out-bt"), map);
+    io::write_bt(args.str("--out-bt"), map, note);
     done("--out-bt");
   }
   if (args.has("--out-ot")) {
-    io::write_ot(args.str("--out-ot"), map);
+    io::write_ot(args.str("--out-ot"), map, note);
     done("--out-ot");
   }
   if (args.has("--out-ply")) {

@@ -155,39 +155,104 @@ PictureFrame fit_picture_frame(const std::vector<const OccupancyMap<Key>*>& maps
   return fr;
 }
 
+namespace detail {
+
+constexpr std::int64_t kNoVoxel = std::numeric_limits<std::int64_t>::min();
+
+/// A map projected onto a panel's two views: per pixel the highest occupied up (top view, below
+/// the cut) and the nearest forward (side view), and which pixels see free space.
+struct PanelViews {
+  std::int64_t w = 0, ht = 0, hs = 0;  // pixels across, top view rows, side view rows
+  std::vector<std::int64_t> top, side;
+  std::vector<std::uint8_t> top_free, side_free;
+  std::size_t beyond = 0;  // occupied voxels outside the frame
+};
+
+template <class Key>
+PanelViews project_panel(const OccupancyMap<Key>& map, const PictureFrame& fr) {
+  const std::int64_t s = fr.step;
+  PanelViews v;
+  v.w = (fr.span(0) + s - 1) / s;
+  v.ht = (fr.span(1) + s - 1) / s;
+  v.hs = (fr.span(2) + s - 1) / s;
+  v.top.assign(static_cast<std::size_t>(v.w * v.ht), kNoVoxel);
+  v.side.assign(static_cast<std::size_t>(v.w * v.hs), kNoVoxel);
+  v.top_free.assign(v.top.size(), 0);
+  v.side_free.assign(v.side.size(), 0);
+  map.for_each_voxel([&](const Key& k, float value) {
+    const auto d = display_coords(fr.view, k);
+    const bool occ = map.is_occupied(value);
+    for (int i = 0; i < 3; ++i)
+      if (d[i] < fr.lo[i] || d[i] > fr.hi[i]) {
+        v.beyond += occ;
+        return;
+      }
+    const std::int64_t px = (d[0] - fr.lo[0]) / s;
+    const auto t = static_cast<std::size_t>((fr.hi[1] - d[1]) / s * v.w + px);
+    const auto e = static_cast<std::size_t>((fr.hi[2] - d[2]) / s * v.w + px);
+    if (!occ) {
+      v.side_free[e] = 1;
+      if (d[2] < fr.cut) v.top_free[t] = 1;
+      return;
+    }
+    if (d[2] < fr.cut) v.top[t] = std::max(v.top[t], d[2]);
+    if (v.side[e] == kNoVoxel || -d[1] > v.side[e]) v.side[e] = -d[1];  // nearest: least forward
+  });
+  return v;
+}
+
+/// One view of a panel at (x0, y0), framed: height colours, the side view shaded by distance.
+inline void plot_view(Image& img, const PictureFrame& fr, const PanelViews& v, std::int64_t x0,
+                      std::int64_t y0, bool is_top) {
+  const std::int64_t s = fr.step, z = fr.zoom, w = v.w, rows = is_top ? v.ht : v.hs;
+  const double yr = static_cast<double>(std::max<std::int64_t>(fr.span(1) - 1, 1));
+  for (std::int64_t rr = 0; rr < rows; ++rr)
+    for (std::int64_t x = 0; x < w; ++x) {
+      const auto i = static_cast<std::size_t>(rr * w + x);
+      Rgb col{255, 255, 255};
+      if (is_top && v.top[i] != kNoVoxel) {
+        col = io::detail::height_colour(fr.colour_t(v.top[i]));
+      } else if (!is_top && v.side[i] != kNoVoxel) {
+        col = io::detail::height_colour(fr.colour_t(fr.hi[2] - rr * s));
+        const double shade = 1.0 - 0.5 * static_cast<double>(-v.side[i] - fr.lo[1]) / yr;
+        for (auto& ch : col) ch = static_cast<std::uint8_t>(ch * shade);
+      } else if (is_top ? v.top_free[i] : v.side_free[i]) {
+        col = kFreeColour;
+      } else {
+        continue;
+      }
+      img.fill_rect(x0 + x * z, y0 + rr * z, z, z, col);
+    }
+  for (std::int64_t x = x0 - 1; x <= x0 + w * z; ++x) {
+    img.set(x, y0 - 1, kFrameColour);
+    img.set(x, y0 + rows * z, kFrameColour);
+  }
+  for (std::int64_t yy = y0 - 1; yy <= y0 + rows * z; ++yy) {
+    img.set(x0 - 1, yy, kFrameColour);
+    img.set(x0 + w * z, yy, kFrameColour);
+  }
+}
+
+/// Scale bar at (x0, y0): a round length of about a quarter of a view `pw` pixels wide.
+inline void draw_scale_bar(Image& img, const PictureFrame& fr, std::int64_t pw, std::int64_t x0,
+                           std::int64_t y0) {
+  const double px_m =
+      fr.res * static_cast<double>(fr.step) / static_cast<double>(fr.zoom);  // metres/pixel
+  const double len = nice_length(static_cast<double>(pw) * px_m / 4.0);
+  const auto bar = static_cast<std::int64_t>(std::lround(len / px_m));
+  img.fill_rect(x0, y0 + 3, bar, 2, kTextColour);
+  img.fill_rect(x0, y0, 1, 8, kTextColour);
+  img.fill_rect(x0 + bar - 1, y0, 1, 8, kTextColour);
+  draw_text(img, x0 + bar + 5, y0 + 1, metres_text(len), kTextColour);
+}
+
+}  // namespace detail
+
 /// One panel: title line, top view, scale bar, side view, notes.
 template <class Key>
 Image render_picture_panel(const OccupancyMap<Key>& map, const PictureFrame& fr,
                            const std::string& title) {
-  const std::int64_t s = fr.step, z = fr.zoom;
-  const std::int64_t w = (fr.span(0) + s - 1) / s, ht = (fr.span(1) + s - 1) / s,
-                     hs = (fr.span(2) + s - 1) / s;
-  // Per pixel: highest occupied up (top view, below the cut) / nearest forward (side view).
-  constexpr std::int64_t none = std::numeric_limits<std::int64_t>::min();
-  std::vector<std::int64_t> top(static_cast<std::size_t>(w * ht), none),
-      side(static_cast<std::size_t>(w * hs), none);
-  std::vector<std::uint8_t> top_free(top.size(), 0), side_free(side.size(), 0);
-  std::size_t beyond = 0;
-  map.for_each_voxel([&](const Key& k, float v) {
-    const auto d = detail::display_coords(fr.view, k);
-    const bool occ = map.is_occupied(v);
-    for (int i = 0; i < 3; ++i)
-      if (d[i] < fr.lo[i] || d[i] > fr.hi[i]) {
-        beyond += occ;
-        return;
-      }
-    const std::int64_t px = (d[0] - fr.lo[0]) / s;
-    const auto t = static_cast<std::size_t>((fr.hi[1] - d[1]) / s * w + px);
-    const auto e = static_cast<std::size_t>((fr.hi[2] - d[2]) / s * w + px);
-    if (!occ) {
-      side_free[e] = 1;
-      if (d[2] < fr.cut) top_free[t] = 1;
-      return;
-    }
-    if (d[2] < fr.cut) top[t] = std::max(top[t], d[2]);
-    if (side[e] == none || -d[1] > side[e]) side[e] = -d[1];  // nearest = smallest forward
-  });
-
+  const detail::PanelViews v = detail::project_panel(map, fr);
   const auto counts = map.count_voxels();
   char line[256];
   std::snprintf(line, sizeof line, "%g m voxels  occupied %zu  free %zu", fr.res, counts.occupied,
@@ -196,16 +261,17 @@ Image render_picture_panel(const OccupancyMap<Key>& map, const PictureFrame& fr,
   if (fr.ceiling_cut)
     notes.push_back("top view: below " + detail::metres_text(fr.metres(2, double(fr.cut) - 0.5)) +
                     " (ceiling cut)");
-  if (beyond) notes.push_back(std::to_string(beyond) + " occupied beyond the drawn extent");
+  if (v.beyond) notes.push_back(std::to_string(v.beyond) + " occupied beyond the drawn extent");
 
-  const std::int64_t m = 10, pw = w * z, title_scale = text_width(title, 2) <= pw ? 2 : 1;
+  const std::int64_t z = fr.zoom;
+  const std::int64_t m = 10, pw = v.w * z, title_scale = text_width(title, 2) <= pw ? 2 : 1;
   const std::int64_t width =
       std::max({pw, text_width(title, static_cast<int>(title_scale)), text_width(line)}) + 2 * m;
   std::int64_t y = m;
   const std::int64_t y_line = y + 7 * title_scale + 5, y_top = y_line + 7 + 18,
-                     y_scale = y_top + ht * z + 6, y_side = y_scale + 7 + 8 + 18,
+                     y_scale = y_top + v.ht * z + 6, y_side = y_scale + 7 + 8 + 18,
                      height =
-                         y_side + hs * z + 8 + static_cast<std::int64_t>(notes.size()) * 11 + m;
+                         y_side + v.hs * z + 8 + static_cast<std::int64_t>(notes.size()) * 11 + m;
   Image img(static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height));
   draw_text(img, m, y, title, kTextColour, static_cast<int>(title_scale));
   draw_text(img, m, y_line, line, kNoteColour);
@@ -214,48 +280,11 @@ Image render_picture_panel(const OccupancyMap<Key>& map, const PictureFrame& fr,
   draw_text(img, m, y_top - 11, "top view (" + r + " right, " + f + " up)", kNoteColour);
   draw_text(img, m, y_side - 11, "side view (" + r + " right, " + fr.view.up.name() + " up)",
             kNoteColour);
-
-  const double yr = static_cast<double>(std::max<std::int64_t>(fr.span(1) - 1, 1));
-  auto plot = [&](std::int64_t x0, std::int64_t y0, std::int64_t rows, bool is_top) {
-    for (std::int64_t rr = 0; rr < rows; ++rr)
-      for (std::int64_t x = 0; x < w; ++x) {
-        const auto i = static_cast<std::size_t>(rr * w + x);
-        Rgb col{255, 255, 255};
-        if (is_top && top[i] != none) {
-          col = io::detail::height_colour(fr.colour_t(top[i]));
-        } else if (!is_top && side[i] != none) {
-          col = io::detail::height_colour(fr.colour_t(fr.hi[2] - rr * s));
-          const double shade = 1.0 - 0.5 * static_cast<double>(-side[i] - fr.lo[1]) / yr;
-          for (auto& ch : col) ch = static_cast<std::uint8_t>(ch * shade);
-        } else if (is_top ? top_free[i] : side_free[i]) {
-          col = kFreeColour;
-        } else {
-          continue;
-        }
-        img.fill_rect(x0 + x * z, y0 + rr * z, z, z, col);
-      }
-    for (std::int64_t x = x0 - 1; x <= x0 + w * z; ++x) {
-      img.set(x, y0 - 1, kFrameColour);
-      img.set(x, y0 + rows * z, kFrameColour);
-    }
-    for (std::int64_t yy = y0 - 1; yy <= y0 + rows * z; ++yy) {
-      img.set(x0 - 1, yy, kFrameColour);
-      img.set(x0 + w * z, yy, kFrameColour);
-    }
-  };
-  plot(m, y_top, ht, true);
-  plot(m, y_side, hs, false);
-
-  // Scale bar: a round length of about a quarter of the view.
-  const double px_m = fr.res * static_cast<double>(s) / static_cast<double>(z);  // metres/pixel
-  const double len = detail::nice_length(static_cast<double>(pw) * px_m / 4.0);
-  const auto bar = static_cast<std::int64_t>(std::lround(len / px_m));
-  img.fill_rect(m, y_scale + 3, bar, 2, kTextColour);
-  img.fill_rect(m, y_scale, 1, 8, kTextColour);
-  img.fill_rect(m + bar - 1, y_scale, 1, 8, kTextColour);
-  draw_text(img, m + bar + 5, y_scale + 1, detail::metres_text(len), kTextColour);
+  detail::plot_view(img, fr, v, m, y_top, true);
+  detail::plot_view(img, fr, v, m, y_side, false);
+  detail::draw_scale_bar(img, fr, pw, m, y_scale);
   for (std::size_t i = 0; i < notes.size(); ++i)
-    draw_text(img, m, y_side + hs * z + 8 + static_cast<std::int64_t>(i) * 11, notes[i],
+    draw_text(img, m, y_side + v.hs * z + 8 + static_cast<std::int64_t>(i) * 11, notes[i],
               kNoteColour);
   return img;
 }

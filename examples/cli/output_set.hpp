@@ -1,7 +1,8 @@
 #pragma once
 // A command's output files, checked before any work: each named (not ""), in an existing,
-// writable folder, not a folder itself, and no two the same file. Writing them then happens in an
-// io::CommitGroup, so a failure leaves every target as it was.
+// writable folder, not a folder itself, and no two the same file; temporaries of them that a
+// killed run left behind are removed (io::remove_stale_temporaries). Writing them then happens in
+// an io::CommitGroup, so a failure leaves every target as it was.
 
 #include <cerrno>
 #include <cstdio>
@@ -75,6 +76,7 @@ inline void check_outputs(const OutputList& outputs) {
     }
     seen.emplace_back(option, id);
   }
+  for (const auto& output : outputs) io::remove_stale_temporaries(output.second);
 }
 
 /// Throws io::Error naming standard output when anything written to it was lost (e.g. a full

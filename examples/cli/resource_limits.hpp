@@ -107,25 +107,6 @@ inline double& memory_limit_bytes() {
   return bytes;
 }
 
-/// Parses "2G", "512M", "1.5GB", "800000000" (decimal units K M G T, optional B); UsageError.
-inline double parse_memory_size(const std::string& option, const std::string& s) {
-  char* end = nullptr;
-  const double v = std::strtod(s.c_str(), &end);
-  std::string unit(end ? end : "");
-  for (char& c : unit) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  if (!unit.empty() && unit.back() == 'B') unit.pop_back();
-  const double scale = unit.empty()  ? 1
-                       : unit == "K" ? 1e3
-                       : unit == "M" ? 1e6
-                       : unit == "G" ? 1e9
-                       : unit == "T" ? 1e12
-                                     : 0;
-  if (s.empty() || end == s.c_str() || scale == 0 || !std::isfinite(v) || v * scale < 16e6)
-    throw UsageError(option + " expects a size of at least 16M such as 800M or 4G, got '" + s +
-                     "'");
-  return v * scale;
-}
-
 /// Makes `bytes` the process's address-space limit (never above the hard limit), so allocations
 /// past it fail as std::bad_alloc. Skipped in sanitizer builds.
 inline void apply_memory_limit(double bytes) {
@@ -163,16 +144,39 @@ inline void check_tree_resolution(const std::string& path, double res) {
   }
 }
 
-/// A .bt/.ot map as the tool reads it: resolution checked, memory bounded.
-inline OccupancyMap<OcKey> read_tree_checked(const std::string& path) {
-  check_tree_resolution(path, io::inspect_octree(path).resolution);
-  return io::read_octree(path, tree_read_options());
-}
-
 /// The least memory one brick of a map takes: its record and its index slots (a brick that one
 /// update made uniform has no value array).
 inline constexpr std::size_t kBrickBytesAtLeast =
     sizeof(OccupancyMap<OcKey>::Brick) + 2 * (sizeof(std::uint64_t) + sizeof(std::uint32_t));
+
+/// read() (which reads `path`); running out of memory in it becomes one io::Error naming the
+/// file and --memory-limit.
+template <class Read>
+auto reading(const std::string& path, Read&& read) -> decltype(read()) {
+  try {
+    return read();
+  } catch (const std::bad_alloc&) {  // MemoryLimitError included
+    throw io::Error(path, "out of memory (--memory-limit " + format_bytes(memory_limit_bytes()) +
+                              ") reading it; a higher --memory-limit reads it");
+  }
+}
+
+/// A .bt/.ot map as the tool reads it: resolution checked, memory bounded by the map's share of
+/// --memory-limit; a tree too large for it, or running out while reading it, is one io::Error
+/// naming the file and --memory-limit.
+inline OccupancyMap<OcKey> read_tree_checked(const std::string& path) {
+  const io::OctreeInfo info = io::inspect_octree(path);
+  check_tree_resolution(path, info.resolution);
+  const double limit = memory_limit_bytes(), share = double(map_memory_share(limit));
+  const double bricks = std::ceil(double(info.occupied_voxels + info.free_voxels) / kBrickVoxels);
+  if (share > 0 && bricks * double(kBrickBytesAtLeast) > share)
+    throw io::Error(path, "the tree's " + std::to_string(info.occupied_voxels + info.free_voxels) +
+                              " voxels need at least " + format_bytes(bricks * kBrickBytesAtLeast) +
+                              " as a map, more than the map's share (" + format_bytes(share) +
+                              ") of --memory-limit " + format_bytes(limit) +
+                              "; a higher --memory-limit reads it");
+  return reading(path, [&] { return io::read_octree(path, tree_read_options()); });
+}
 
 /// The part of each ray from `origin` that a scan stores, as the map sees it: endpoints beyond
 /// the key range (32768 voxels from the centre) are skipped, rays are cut at max_range (> 0).

@@ -20,6 +20,7 @@
 #include <knnocc/io/error.hpp>
 #include <knnocc/map/occupancy_map.hpp>
 
+#include "sha256.hpp"
 #include "view_frame.hpp"
 #include "view_page_script.hpp"
 
@@ -140,6 +141,125 @@ inline std::string json_string(const std::string& s) {
   return o + "\"";
 }
 
+/// A meta element that lets the page run its own inline scripts (by their SHA-256) and nothing
+/// else: no other script, no event handler attribute, no network, no plugin; inline styles stay.
+inline std::string content_security_policy(const std::vector<std::string>& scripts) {
+  std::string sources;
+  for (const std::string& s : scripts) {
+    const auto digest = sha256(s);
+    sources += " 'sha256-" + base64(std::string(digest.begin(), digest.end())) + "'";
+  }
+  return "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; script-src" +
+         sources + "; style-src 'unsafe-inline'; base-uri 'none'; form-action 'none'\">\n";
+}
+
+}  // namespace detail
+
+namespace detail {
+
+/// A map's voxels in page coordinates (X right, Y up, Z -forward; three.js is right-handed with
+/// Y up), shifted so that the least index per axis is 0 (`lo` holds the shift).
+struct PageVoxels {
+  std::vector<std::array<std::int64_t, 3>> occ, fre;
+  std::array<std::int64_t, 3> lo{};
+};
+
+inline PageVoxels page_voxels(const OccupancyMap<OcKey>& map, const std::array<int, 3>& axis,
+                              const std::array<int, 3>& sign) {
+  PageVoxels pv;
+  map.for_each_voxel([&](const OcKey& k, float v) {
+    std::array<std::int64_t, 3> d{};
+    for (int i = 0; i < 3; ++i)
+      d[i] = sign[i] * (static_cast<std::int64_t>(k[axis[i]]) - OcKey::center);
+    (map.is_occupied(v) ? pv.occ : pv.fre).push_back(d);
+  });
+  for (int i = 0; i < 3; ++i) {
+    pv.lo[i] = std::numeric_limits<std::int64_t>::max();
+    for (const auto* set : {&pv.occ, &pv.fre})
+      for (const auto& d : *set) pv.lo[i] = std::min(pv.lo[i], d[i]);
+  }
+  for (auto* set : {&pv.occ, &pv.fre})
+    for (auto& d : *set)
+      for (int i = 0; i < 3; ++i) d[i] -= pv.lo[i];
+  return pv;
+}
+
+/// Free cells, coarsened until there are at most `max_free`; cells holding an occupied voxel are
+/// left out. `bytes`: the sorted cells as three 16-bit indices each.
+struct FreeCells {
+  int level = 0;
+  std::size_t count = 0;
+  std::string bytes;
+};
+
+inline FreeCells free_cells(const PageVoxels& pv, std::size_t max_free) {
+  FreeCells fc;
+  std::vector<std::uint64_t> cells;
+  for (; fc.level <= 16; ++fc.level) {
+    const int l = fc.level;
+    std::unordered_set<std::uint64_t> occ_cells, seen;
+    for (const auto& d : pv.occ) occ_cells.insert(pack_cell(d[0] >> l, d[1] >> l, d[2] >> l));
+    cells.clear();
+    for (const auto& d : pv.fre) {
+      const auto c = pack_cell(d[0] >> l, d[1] >> l, d[2] >> l);
+      if (!occ_cells.count(c) && seen.insert(c).second) cells.push_back(c);
+    }
+    if (cells.size() <= max_free) break;
+  }
+  std::sort(cells.begin(), cells.end());
+  const std::uint64_t m21 = (std::uint64_t{1} << 21) - 1;
+  for (const std::uint64_t c : cells) {
+    put_u16(fc.bytes, static_cast<std::int64_t>(c >> 42));
+    put_u16(fc.bytes, static_cast<std::int64_t>((c >> 21) & m21));
+    put_u16(fc.bytes, static_cast<std::int64_t>(c & m21));
+  }
+  fc.count = cells.size();
+  return fc;
+}
+
+/// One map's entry of the page's data; the heights of its occupied voxels go to `heights`.
+inline std::string map_json(const ViewMap& vm, const std::array<int, 3>& page_axis,
+                            const std::array<int, 3>& page_sign, const ViewOptions& opt,
+                            std::vector<double>& heights) {
+  const auto& map = *vm.map;
+  const double res = map.grid().resolution();
+  const PageVoxels pv = page_voxels(map, page_axis, page_sign);
+  PageCells pc;
+  for (int level = 0; level <= 16; ++level) {
+    pc = occupied_cells(pv.occ, level);
+    if (pc.faces <= opt.max_faces) break;
+  }
+  const FreeCells fc = free_cells(pv, opt.max_free);
+  // Metres of voxel index 0 (its lower corner) per page axis: a voxel with display index d
+  // spans [d, d + 1] * res when the axis keeps the map's sign, [d - 1, d] * res otherwise.
+  std::array<double, 3> origin{};
+  for (int i = 0; i < 3; ++i)
+    origin[i] = static_cast<double>(pv.lo[i] + (page_sign[i] < 0 ? -1 : 0)) * res;
+  // Robust centre and size for the camera (outliers do not push the map out of view).
+  std::array<double, 3> centre{}, half{};
+  for (int i = 0; i < 3; ++i) {
+    std::vector<double> v;
+    v.reserve(pv.occ.size());
+    for (const auto& d : pv.occ) v.push_back((static_cast<double>(d[i]) + 0.5) * res + origin[i]);
+    const double a = percentile_of(v, 0.01), b = percentile_of(v, 0.99);
+    centre[i] = 0.5 * (a + b);
+    half[i] = 0.5 * (b - a) + res;
+    if (i == 1) heights.insert(heights.end(), v.begin(), v.end());
+  }
+  const auto counts = map.count_voxels();
+  char buf[1024];
+  std::snprintf(buf, sizeof buf,
+                "{\"name\":%s,\"res\":%.9g,\"occupied\":%zu,\"free\":%zu,\"level\":%d,"
+                "\"cells\":%zu,\"drawnCells\":%zu,\"faces\":%zu,\"freeLevel\":%d,"
+                "\"freeCells\":%zu,\"origin\":[%.9g,%.9g,%.9g],\"centre\":[%.6g,%.6g,%.6g],"
+                "\"half\":[%.6g,%.6g,%.6g],",
+                json_string(vm.name).c_str(), res, counts.occupied, counts.free, pc.level, pc.count,
+                pc.masks.size(), pc.faces, fc.level, fc.count, origin[0], origin[1], origin[2],
+                centre[0], centre[1], centre[2], half[0], half[1], half[2]);
+  return std::string(buf) + "\"cellData\":\"" + base64(pc.cells) + "\",\"maskData\":\"" +
+         base64(pc.masks) + "\",\"freeData\":\"" + base64(fc.bytes) + "\"}";
+}
+
 }  // namespace detail
 
 /// The whole page for `maps` (at least one, each with an occupied voxel).
@@ -151,85 +271,9 @@ inline std::string view_page_html(const std::vector<ViewMap>& maps, UpAxis up,
   const std::array<int, 3> page_sign{vf.sign[0], vf.sign[2], -vf.sign[1]};
   std::vector<double> all_heights;
   std::string maps_json;
-  for (const ViewMap& vm : maps) {
-    const auto& map = *vm.map;
-    const double res = map.grid().resolution();
-    std::vector<std::array<std::int64_t, 3>> occ, fre;
-    map.for_each_voxel([&](const OcKey& k, float v) {
-      std::array<std::int64_t, 3> d{};
-      for (int i = 0; i < 3; ++i)
-        d[i] = page_sign[i] * (static_cast<std::int64_t>(k[page_axis[i]]) - OcKey::center);
-      (map.is_occupied(v) ? occ : fre).push_back(d);
-    });
-    std::array<std::int64_t, 3> lo{};
-    for (int i = 0; i < 3; ++i) {
-      lo[i] = std::numeric_limits<std::int64_t>::max();
-      for (const auto* set : {&occ, &fre})
-        for (const auto& d : *set) lo[i] = std::min(lo[i], d[i]);
-    }
-    for (auto* set : {&occ, &fre})
-      for (auto& d : *set)
-        for (int i = 0; i < 3; ++i) d[i] -= lo[i];
-    detail::PageCells pc;
-    for (int level = 0; level <= 16; ++level) {
-      pc = detail::occupied_cells(occ, level);
-      if (pc.faces <= opt.max_faces) break;
-    }
-    // Free cells: coarsened until within budget; cells holding an occupied voxel are left out.
-    int free_level = 0;
-    std::vector<std::uint64_t> free_cells;
-    for (; free_level <= 16; ++free_level) {
-      std::unordered_set<std::uint64_t> occ_cells, seen;
-      for (const auto& d : occ)
-        occ_cells.insert(
-            detail::pack_cell(d[0] >> free_level, d[1] >> free_level, d[2] >> free_level));
-      free_cells.clear();
-      for (const auto& d : fre) {
-        const auto c =
-            detail::pack_cell(d[0] >> free_level, d[1] >> free_level, d[2] >> free_level);
-        if (!occ_cells.count(c) && seen.insert(c).second) free_cells.push_back(c);
-      }
-      if (free_cells.size() <= opt.max_free) break;
-    }
-    std::sort(free_cells.begin(), free_cells.end());
-    std::string free_bytes;
-    const std::uint64_t m21 = (std::uint64_t{1} << 21) - 1;
-    for (const std::uint64_t c : free_cells) {
-      detail::put_u16(free_bytes, static_cast<std::int64_t>(c >> 42));
-      detail::put_u16(free_bytes, static_cast<std::int64_t>((c >> 21) & m21));
-      detail::put_u16(free_bytes, static_cast<std::int64_t>(c & m21));
-    }
-    // Metres of voxel index 0 (its lower corner) per page axis: a voxel with display index d
-    // spans [d, d + 1] * res when the axis keeps the map's sign, [d - 1, d] * res otherwise.
-    std::array<double, 3> origin{};
-    for (int i = 0; i < 3; ++i)
-      origin[i] = static_cast<double>(lo[i] + (page_sign[i] < 0 ? -1 : 0)) * res;
-    // Robust centre and size for the camera (outliers do not push the map out of view).
-    std::array<double, 3> centre{}, half{};
-    for (int i = 0; i < 3; ++i) {
-      std::vector<double> v;
-      v.reserve(occ.size());
-      for (const auto& d : occ) v.push_back((static_cast<double>(d[i]) + 0.5) * res + origin[i]);
-      const double a = detail::percentile_of(v, 0.01), b = detail::percentile_of(v, 0.99);
-      centre[i] = 0.5 * (a + b);
-      half[i] = 0.5 * (b - a) + res;
-      if (i == 1)
-        for (const double h : v) all_heights.push_back(h);
-    }
-    const auto counts = map.count_voxels();
-    char buf[1024];
-    std::snprintf(buf, sizeof buf,
-                  "{\"name\":%s,\"res\":%.9g,\"occupied\":%zu,\"free\":%zu,\"level\":%d,"
-                  "\"cells\":%zu,\"drawnCells\":%zu,\"faces\":%zu,\"freeLevel\":%d,"
-                  "\"freeCells\":%zu,\"origin\":[%.9g,%.9g,%.9g],\"centre\":[%.6g,%.6g,%.6g],"
-                  "\"half\":[%.6g,%.6g,%.6g],",
-                  detail::json_string(vm.name).c_str(), res, counts.occupied, counts.free, pc.level,
-                  pc.count, pc.masks.size(), pc.faces, free_level, free_cells.size(), origin[0],
-                  origin[1], origin[2], centre[0], centre[1], centre[2], half[0], half[1], half[2]);
-    maps_json += std::string(maps_json.empty() ? "" : ",\n") + buf + "\"cellData\":\"" +
-                 detail::base64(pc.cells) + "\",\"maskData\":\"" + detail::base64(pc.masks) +
-                 "\",\"freeData\":\"" + detail::base64(free_bytes) + "\"}";
-  }
+  for (const ViewMap& vm : maps)
+    maps_json += std::string(maps_json.empty() ? "" : ",\n") +
+                 detail::map_json(vm, page_axis, page_sign, opt, all_heights);
   const double h_lo = detail::percentile_of(all_heights, 0.02),
                h_hi = std::max(detail::percentile_of(all_heights, 0.98), h_lo + 1e-3);
   auto axis_name = [](int a, int s) { return std::string(s < 0 ? "-" : "") + char('x' + a); };
@@ -239,15 +283,18 @@ inline std::string view_page_html(const std::vector<ViewMap>& maps, UpAxis up,
                 "\"heightHi\":%.6g,\"maxFaces\":%zu,\"maps\":[\n",
                 up.name().c_str(), axis_name(vf.axis[0], vf.sign[0]).c_str(),
                 axis_name(vf.axis[1], vf.sign[1]).c_str(), h_lo, h_hi, opt.max_faces);
-  std::string html = detail::kViewPageHead;
+  std::vector<std::string> scripts;
 #ifdef KNNOCC_TOOL_THREE_JS
-  html += "<script>\n";
-  for (const char* piece : detail::kThreeJsPieces) html += piece;
-  html += "\n</script>\n";
+  scripts.emplace_back("\n");
+  for (const char* piece : detail::kThreeJsPieces) scripts.back() += piece;
+  scripts.back() += "\n";
 #endif
-  html += "<script>\nconst KNNOCC_DATA = " + std::string(head) + maps_json + "]};\n</script>\n";
-  html += detail::kViewPageScript;
-  return html;
+  scripts.push_back("\nconst KNNOCC_DATA = " + std::string(head) + maps_json + "]};\n");
+  scripts.emplace_back(detail::kViewPageScript);
+  std::string html = "<!doctype html>\n<html><head><meta charset=\"utf-8\">\n" +
+                     detail::content_security_policy(scripts) + detail::kViewPageHead;
+  for (const std::string& s : scripts) html += "<script>" + s + "</script>\n";
+  return html + "</body></html>\n";
 }
 
 /// Writes the page atomically; io::Error naming `path` for an empty map or a build without

@@ -10,8 +10,8 @@
 
 namespace knnocc::cli::detail {
 
-inline const char* const kViewPageHead = R"html(<!doctype html>
-<html><head><meta charset="utf-8"><title>knnocc view</title>
+// The head after its Content-Security-Policy (view_page.hpp writes the lines before it).
+inline const char* const kViewPageHead = R"html(<title>knnocc view</title>
 <style>
 html,body{margin:0;height:100%;overflow:hidden;background:#f4f5f7;font:13px sans-serif;color:#222}
 #c{display:block;width:100%;height:100%}
@@ -38,7 +38,8 @@ background:linear-gradient(to top,#2640d9,#1abfe6,#33cc40,#f2d926,#d9261a)}
 <div style="color:#666">clipped to 2-98 %</div></div>
 )html";
 
-inline const char* const kViewPageScript = R"js(<script>
+// The page's own script (view_page.hpp puts it in a <script> element and lists its hash).
+inline const char* const kViewPageScript = R"js(
 (function () {
 'use strict';
 const D = KNNOCC_DATA;
@@ -178,18 +179,21 @@ function show(i) {
   groups.forEach(function (g, k) { g.visible = k === i; g.userData.points.visible = freeBox.checked; });
   const m = D.maps[i];
   document.querySelectorAll('#maps button').forEach(function (b, k) { b.className = k === i ? 'on' : ''; });
-  document.getElementById('info').innerHTML = '<b>' + m.name + '</b>: ' + m.res + ' m voxels, ' +
-      fmt(m.occupied) + ' occupied, ' + fmt(m.free) + ' free<br>up = ' + D.up + ' (right ' + D.right +
-      ', forward ' + D.forward + '); ' + fmt(groups[i].userData.faces) + ' faces drawn';
+  // Names come from file names and flags: text nodes only, never markup.
+  const info = document.getElementById('info'), name = document.createElement('b');
+  name.textContent = m.name;
+  info.replaceChildren(name, ': ' + m.res + ' m voxels, ' + fmt(m.occupied) + ' occupied, ' +
+      fmt(m.free) + ' free', document.createElement('br'), 'up = ' + D.up + ' (right ' + D.right +
+      ', forward ' + D.forward + '); ' + fmt(groups[i].userData.faces) + ' faces drawn');
   const cellM = m.res * Math.pow(2, m.level);
   let note = '';
   if (m.level > 0)
     note += 'Subset: drawn at ' + cellM.toPrecision(3) + ' m cells (' + Math.pow(2, m.level) +
-        '&times; coarser, a cell is occupied when any voxel in it is): ' + fmt(m.cells) +
+        '\u00d7 coarser, a cell is occupied when any voxel in it is): ' + fmt(m.cells) +
         ' cells for ' + fmt(m.occupied) + ' voxels. ';
   if (freeBox.checked && m.freeLevel > 0)
     note += 'Free voxels: ' + fmt(m.freeCells) + ' points at ' + (m.res * Math.pow(2, m.freeLevel)).toPrecision(3) + ' m.';
-  document.getElementById('note').innerHTML = note;
+  document.getElementById('note').textContent = note;
   draw();
 }
 const mapsDiv = document.getElementById('maps');
@@ -226,8 +230,6 @@ const ms = Math.round(performance.now());
 document.body.setAttribute('data-drawn-ms', ms);
 document.title = 'knnocc view: drawn in ' + ms + ' ms';
 })();
-</script>
-</body></html>
 )js";
 
 }  // namespace knnocc::cli::detail

@@ -107,6 +107,19 @@ struct has_tracker_params : std::false_type {};
 template <class M>
 struct has_tracker_params<M, std::void_t<decltype(std::declval<const M&>().tracker_params())>>
     : std::true_type {};
+
+/// What the scan integrator does with an end point q seen from o (both as the float points it
+/// casts): ScanStats counts the first three; only `inserted` points mark a voxel occupied.
+enum class EndpointFate { nonfinite, beyond_max_range, out_of_range, inserted };
+template <class Key>
+EndpointFate endpoint_fate(const Grid<Key>& grid, const Point3f& q, const Point3f& o,
+                           double max_range) {
+  if (!finite(q)) return EndpointFate::nonfinite;
+  if (max_range >= 0.0 && octomap_norm(q.x - o.x, q.y - o.y, q.z - o.z) > max_range)
+    return EndpointFate::beyond_max_range;
+  Key k;
+  return grid.point_to_key(q, k) ? EndpointFate::inserted : EndpointFate::out_of_range;
+}
 }  // namespace detail
 
 template <class Model = OctoMapModel, class Key = OcKey,
@@ -174,11 +187,11 @@ class Mapper {
   }
 
   /// Alg. 3 for one keyframe: `points` in the world frame (any point type), seen from `origin`;
-  /// `ids` one map-point id per point, or empty (then each point is a new map point). A sequence
-  /// must either always or never give ids, and a Mapper takes keyframes through this overload or
-  /// through the ChangeSet one, not both (std::invalid_argument). The OctoMap model ignores ids.
-  /// A NaN/Inf origin inserts nothing and leaves the map cloud as it was
-  /// (ScanStats::origin_valid == false).
+  /// `ids` one distinct map-point id per point, or empty (then each point is a new map point); a
+  /// repeated id is std::invalid_argument. A sequence must either always or never give ids, and a
+  /// Mapper takes keyframes through this overload or through the ChangeSet one, not both
+  /// (std::invalid_argument). The OctoMap model ignores ids. A NaN/Inf origin inserts nothing and
+  /// leaves the map cloud as it was (ScanStats::origin_valid == false).
   template <class Points, class Origin>
   KeyframeStats insert_keyframe(const Origin& origin, const Points& points,
                                 const std::vector<std::uint64_t>& ids = {}) {
@@ -301,6 +314,7 @@ class Mapper {
     for (const std::uint64_t id : ids)
       if (id == KeyframeUnion::kNoId)
         detail::invalid_argument("insert_keyframe: id 2^64-1 is reserved (KeyframeUnion::kNoId)");
+    detail::check_distinct_ids("insert_keyframe", ids, id_scratch_);
     if (is_finite(origin_)) return true;
     ks.scan.origin_valid = false;
     ks.scan.points = world_.size();
@@ -310,13 +324,10 @@ class Mapper {
   // The integrator's tests (OctoMap's float norm against max_range, the key range), so the map
   // cloud holds exactly the points that make an occupied update.
   bool within_range(std::size_t j) const {
-    const Point3d& p = world_[j];
-    if (!is_finite(p)) return false;
-    const Point3f q = detail::to_point3f(p), o = detail::to_point3f(origin_);
-    Key k;
-    if (!map_->grid().point_to_key(q, k)) return false;
-    if (options_.max_range < 0.0) return true;
-    return detail::octomap_norm(q.x - o.x, q.y - o.y, q.z - o.z) <= options_.max_range;
+    return is_finite(world_[j]) &&
+           detail::endpoint_fate(map_->grid(), detail::to_point3f(world_[j]),
+                                 detail::to_point3f(origin_),
+                                 options_.max_range) == detail::EndpointFate::inserted;
   }
 
   // Eq 13-15 for the loaded keyframe, then the scan (Alg. 3).
@@ -386,7 +397,7 @@ class Mapper {
   KeyframeUnion union_;
   Point3d origin_;
   std::vector<Point3d> world_, cloud_;
-  std::vector<std::uint64_t> cloud_ids_, cloud_map_ids_, point_ids_;
+  std::vector<std::uint64_t> cloud_ids_, cloud_map_ids_, point_ids_, id_scratch_;
   std::vector<EndpointRating> ratings_;
   bool ids_given_ = false;
   bool without_ids_ = false;  // keyframes without ids kept out of the map cloud (model's choice)

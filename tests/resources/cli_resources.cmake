@@ -1,6 +1,7 @@
 # The tool's resource and output probes (tests/resources/cli_resources.sh): outputs checked before
-# the work, written through unique temporaries, never replacing a device, removed on SIGTERM;
-# stdout write errors; threads; oversized headers; the memory limit.
+# the work, written through unique temporaries, never replacing a device or an input, removed on
+# SIGTERM or at the next start; stdout write errors; threads; oversized headers; the memory limit;
+# control bytes escaped, corrections checked against the keyframes, unmappable values refused.
 find_program(KNNOCC_BASH bash)
 if(TARGET knnocc_tool AND KNNOCC_BASH)
   set(KNNOCC_RESOURCE_CASES
@@ -8,8 +9,11 @@ if(TARGET knnocc_tool AND KNNOCC_BASH)
     device_written_in_place user_tmp_untouched concurrent_writers stdout_full png_extension
     sim_non_empty_folder sigterm_removes_temporaries threads_capped huge_ply_header
     huge_pcd_header memory_far_rays memory_tiny_resolution memory_long_fine_rays memory_out_of_memory memory_broken_compressed memory_corrections
-    bad_memory_limit
-    missing_input velodyne_without_calib utf8_bom_accepted mixed_ids_name_the_file info_like_map)
+    memory_big_tree bad_memory_limit
+    missing_input velodyne_without_calib utf8_bom_accepted mixed_ids_name_the_file info_like_map
+    output_is_input control_bytes_escaped corrections_checked corrections_velodyne_frame
+    corrections_key_range_note
+    unmappable_values save_every_resumes stale_temporaries_removed)
   foreach(_case IN LISTS KNNOCC_RESOURCE_CASES)
     add_test(NAME cli.resources.${_case}
       COMMAND "${KNNOCC_BASH}" "${CMAKE_CURRENT_LIST_DIR}/cli_resources.sh"

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Resource and output probes of the knnocc tool, one case per ctest test:
+# Resource, output and bad-data probes of the knnocc tool, one case per ctest test:
 #   cli_resources.sh TOOL WORK_DIR CASE
 # Each case builds its inputs, runs the tool as a user would and checks the exit status, the
 # one-line message and which files exist afterwards. Exit 0 = pass.
@@ -184,11 +184,177 @@ case "$CASE" in
     expect 2 "seq/clouds/000001.ply: .*with and without ids" "$K" map --input seq --res 0.1 --model knn ;;
   info_like_map)  # info refuses what map refuses: a 1e-9 m tree, a non-unit VIEWPOINT
     printf '# Octomap OcTree binary file\nid OcTree\nsize 1\nres 1e-9\ndata\n\x00\x00' > tiny.bt
-    expect 2 "tiny.bt: resolution 1e-09 is below 0.0001" "$K" info tiny.bt
-    expect 2 "tiny.bt: resolution 1e-09 is below 0.0001" "$K" convert tiny.bt copy.bt
+    expect 2 "tiny.bt: (header line 4: )?resolution 1e-09 is below" "$K" info tiny.bt
+    expect 2 "tiny.bt: (header line 4: )?resolution 1e-09 is below" "$K" convert tiny.bt copy.bt
     printf 'FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nVIEWPOINT 0 0 0 2 0 0 0\nDATA ascii\n1 0 0\n' > vp.pcd
     expect 2 "vp.pcd: VIEWPOINT quaternion norm 2.000000 is not 1" "$K" map --input vp.pcd --res 0.1
     expect 2 "vp.pcd: VIEWPOINT quaternion norm 2.000000 is not 1" "$K" info vp.pcd ;;
+  memory_big_tree)  # a .bt whose one leaf covers 2^30 voxels: every command that loads a map
+    # refuses it under a small limit, naming the file and --memory-limit (root and 4 inner nodes
+    # with child 0 inner, the depth-5 node with child 0 an occupied leaf at depth 6)
+    printf '# Octomap OcTree binary file\nid OcTree\nsize 7\nres 0.1\ndata\n\x03\x00\x03\x00\x03\x00\x03\x00\x03\x00\x02\x00' > big.bt
+    msg="big.bt: the tree's 1073741824 voxels need at least .* more than the map's share .* of --memory-limit 100 MB"
+    expect 2 "$msg" "$K" convert big.bt out.ot --memory-limit 100M
+    expect 2 "$msg" "$K" view big.bt -o page.html --memory-limit 100M
+    printf 'ground 0\nellipsoid 0 0 1 1 1 1\n' > ref.txt
+    expect 2 "$msg" "$K" eval --map big.bt --reference ref.txt --memory-limit 100M
+    expect 2 "$msg" "$K" map --input p.xyz --init-map big.bt --memory-limit 100M --out-ot x.ot
+    [ ! -e out.ot ] && [ ! -e page.html ] && [ ! -e x.ot ] || fail "an output was written"
+    no_temporaries ;;
+  output_is_input)  # an output that is an input, or lies in an input folder: one line, nothing written
+    "$K" sim --out seq --seed 3 --keyframes 12 --drift 0.3 > /dev/null || fail "sim"
+    "$K" map --input p.xyz --res 0.1 --out-bt small.bt --out-ply a.ply > /dev/null || fail "map"
+    ln -s small.bt link.bt && ln small.bt hard.bt && ln -s seq seqlink && mkdir corr lseq
+    cp seq/corrections/* corr/ && cp -r seq/poses.txt lseq/ && mkdir lseq/clouds
+    for f in seq/clouds/*; do ln -s "$PWD/$f" lseq/clouds/; done  # clouds linked in from seq
+    inputs() { find seq corr lseq small.bt a.ply p.xyz -exec md5sum {} + 2> /dev/null | sort; }
+    before=$(inputs)
+    expect 2 "^knnocc view: small.bt: --out would replace an input \('small.bt' of MAP\); nothing was written$" \
+      "$K" view small.bt -o small.bt
+    expect 2 "link.bt: --out would replace an input \('small.bt' of MAP\)" "$K" view small.bt -o link.bt
+    expect 2 "hard.bt: OUT would replace an input \('small.bt' of IN\)" "$K" convert small.bt hard.bt
+    expect 2 "a.ply: --out-ply would replace an input \('a.ply' of --input\)" \
+      "$K" map --input a.ply --res 0.1 --out-ply a.ply
+    expect 2 "seq/poses.txt: --out-voxels would replace an input \('seq/poses.txt' of --input\)" \
+      "$K" map --input seq --res 0.1 --out-voxels seq/poses.txt
+    expect 2 "seq/map.bt: --out-bt lies inside an input folder \('seq' of --input\)" \
+      "$K" map --input seq --res 0.1 --out-voxels v.txt --out-bt seq/map.bt
+    expect 2 "seqlink/clouds/new.ply: --out-ply lies inside an input folder \('seq/clouds' of --input\)" \
+      "$K" map --input seq --res 0.1 --out-ply seqlink/clouds/new.ply
+    expect 2 "seq/clouds/000003.ply: --out-ply would replace an input \('lseq/clouds/000003.ply' of --input\)" \
+      "$K" map --input lseq --res 0.1 --out-ply seq/clouds/000003.ply
+    expect 2 "seq/corrections/after_000009.txt: --out-voxels would replace an input" \
+      "$K" map --input seq --corrections seq/corrections --res 0.1 --out-voxels seq/corrections/after_000009.txt
+    expect 2 "corr/new.txt: --out-voxels lies inside an input folder \('corr' of --corrections\)" \
+      "$K" map --input seq --corrections corr --res 0.1 --out-voxels corr/new.txt
+    expect 2 "small.bt: --out-bt would replace an input \('small.bt' of --init-map\)" \
+      "$K" map --input p.xyz --init-map small.bt --out-bt small.bt
+    expect 2 "seq/clouds/000001.ply: --out-stats would replace an input \('seq/clouds/000001.ply' of --input\)" \
+      "$K" track --input seq --k 3 --out-stats seq/clouds/000001.ply
+    expect 2 "seq/s.txt: --out-s lies inside an input folder" "$K" track --input seq --k 3 --out-stats s.txt --out-s seq/s.txt
+    [ "$(inputs)" = "$before" ] || fail "an input changed"
+    for f in v.txt seq/map.bt seq/clouds/new.ply corr/new.txt s.txt seq/s.txt; do
+      [ ! -e "$f" ] || fail "$f written"
+    done
+    [ -z "$(find . -name '*.tmp-*')" ] || fail "temporaries left: $(find . -name '*.tmp-*')"
+    expect 0 "" "$K" map --input seq --res 0.1 --out-bt seq.bt  # beside the folder: written
+    [ -s seq.bt ] || fail "seq.bt not written" ;;
+  control_bytes_escaped)  # bytes of a file reach the terminal escaped, a NUL does not cut the line
+    printf '# Octomap OcTree binary file\nid Oc\033[2JTree\000X\nsize 0\nres 0.1\ndata\n' > esc.bt
+    expect 2 "esc.bt: unsupported OctoMap tree type 'Oc\\\\x1b\[2JTree\\\\x00X' \(supported" "$K" info esc.bt
+    ! grep -q $'\033' err.txt || fail "a raw ESC byte on stderr"
+    printf 'ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\033]0;t\007\nproperty float x\033]0;t\007\nend_header\n' > esc.ply
+    expect 2 "esc.ply: PLY header line 5: duplicate property 'x\\\\x1b\]0;t\\\\x07' in element 'vertex'" \
+      "$K" map --input esc.ply --res 0.1
+    "$K" sim --out seq --seed 3 --keyframes 4 > /dev/null || fail "sim"
+    mkdir corr && printf '0 0 0 0 0 0 0 1\033[1m\n' > corr/after_000000.txt
+    expect 2 "corr/after_000000.txt: line 1: cannot parse '1\\\\x1b\[1m' as a number" \
+      "$K" map --input seq --corrections corr --res 0.1
+    ! grep -q $'\033' err.txt || fail "a raw ESC byte on stderr" ;;
+  corrections_checked)  # snapshots must fit the keyframes: names, duplicates, stamps, rows
+    "$K" sim --out seq --seed 3 --keyframes 12 --drift 0.3 > /dev/null || fail "sim"
+    snap() { rm -rf c && mkdir c && cp seq/corrections/* c/; }
+    snap && cp c/after_000009.txt c/after_9.txt
+    expect 2 "c/after_9.txt: a second snapshot of keyframe 9 \(also after_000009.txt\)" \
+      "$K" map --input seq --corrections c --res 0.1 --out-voxels v.txt
+    for name in AFTER_000009.txt after_000009.TXT after_abc.txt after9.txt; do
+      snap && mv c/after_000009.txt "c/$name"
+      expect 2 "c/$name: not a snapshot name: snapshots are after_N.txt" \
+        "$K" map --input seq --corrections c --res 0.1 --out-voxels v.txt
+    done
+    snap && grep -v '^#' seq/corrections/after_000009.txt | tac > c/after_000009.txt  # rows reversed
+    expect 2 "c/after_000009.txt: line 1: stamp 9.000000 is not keyframe 0's \(0.000000 in poses.txt; tolerance 1e-4 s\)" \
+      "$K" map --input seq --corrections c --res 0.1 --out-voxels v.txt
+    snap && awk '!/^#/ { $1 = $1 + 1 } 1' seq/corrections/after_000009.txt > c/after_000009.txt  # shifted
+    expect 2 "c/after_000009.txt: line 2: stamp 1.000000 is not keyframe 0's" \
+      "$K" map --input seq --corrections c --res 0.1 --out-voxels v.txt
+    # 600 MB that should hold 10 rows: refused at row 11, the file never read whole.
+    snap && echo '10 0 0 0 0 0 0 1' >> c/after_000009.txt && truncate -s 600M c/after_000009.txt
+    expect 2 "c/after_000009.txt: line 12: more poses than the 10 expected" \
+      timeout 5 "$K" map --input seq --corrections c --res 0.1 --memory-limit 1G --out-voxels v.txt
+    [ ! -e v.txt ] || fail "v.txt written"
+    snap && expect 0 "" "$K" map --input seq --corrections c --res 0.1 --out-voxels v.txt
+    [ -s v.txt ] || fail "the good snapshots were refused" ;;
+  corrections_velodyne_frame)  # KITTI: snapshot rows are poses.txt's rows, calib.txt's Tr applied alike
+    mkdir -p kitti/velodyne kitti/c
+    printf 'Tr: 0 -1 0 0.1 0 0 -1 -0.2 1 0 0 0.3\n' > kitti/calib.txt
+    printf '1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 0.5\n' > kitti/poses.txt
+    for i in 0 1; do  # two points, 3 m and 4 m ahead of the Velodyne
+      printf '\0\0\x40\x40\0\0\0\0\0\0\0\0\0\0\0\0\0\0\x80\x40\0\0\x80\x3f\0\0\0\0\0\0\0\0' > kitti/velodyne/00000$i.bin
+    done
+    cp kitti/poses.txt kitti/c/after_000001.txt  # the same poses: nothing to correct
+    "$K" map --input kitti --res 0.1 --out-voxels plain.txt > /dev/null || fail "plain map"
+    expect 0 "" "$K" map --input kitti --corrections kitti/c --res 0.1 --out-voxels live.txt
+    grep -q "^corrections 1 reposed_keyframes 0 " out.txt || fail "keyframes re-posed: $(cat out.txt)"
+    cmp -s plain.txt live.txt || fail "the corrected map differs from the plain one" ;;
+  corrections_key_range_note)  # a correction that moves points out of the key range: map's note
+    "$K" sim --out seq --seed 3 --keyframes 12 --drift 0.3 > /dev/null || fail "sim"
+    mkdir c && awk '!/^#/ && ++n == 4 { $2 = $2 + 5000 } 1' seq/corrections/after_000009.txt > c/after_000009.txt
+    "$K" map --input seq --corrections c --res 0.1 > out.txt 2> err.txt || fail "exit $?"
+    cat err.txt
+    grep -Eq "^knnocc map: seq: skipped [1-9][0-9]* points outside the map's key range \(\|c\| >= 3276.8 m at --res 0.1\)" err.txt ||
+      fail "no key-range note"
+    n=$(grep -o 'skipped [0-9]*' err.txt | cut -d' ' -f2)
+    # the same count as plain map with that keyframe's pose
+    mkdir -p moved && cp -r seq/clouds moved/ && { head -1 seq/poses.txt; sed -n 2,11p seq/corrections/after_000009.txt | awk 'NR == 4 { $2 = $2 + 5000 } 1'; sed -n 12,13p seq/poses.txt; } > moved/poses.txt
+    "$K" map --input moved --res 0.1 > /dev/null 2> err2.txt || fail "plain map"
+    cat err2.txt
+    grep -q "skipped $n points outside the map's key range" err2.txt || fail "plain map skips another count" ;;
+  unmappable_values)  # refused on read, or a warning: never a map of nonsense without a word
+    "$K" map --input p.xyz --res 0.1 --out-bt small.bt > /dev/null || fail "map"
+    sed 's/^res 0.1$/res 1e308/' small.bt > huge.bt
+    expect 2 "huge.bt: header line [0-9]+: resolution 1e\+308 is above 1.03846e\+34 m: the key range" "$K" view huge.bt -o h.html
+    expect 2 "huge.bt: header line [0-9]+: resolution 1e\+308 is above" "$K" convert huge.bt h.ply
+    [ ! -e h.html ] && [ ! -e h.ply ] || fail "an output of the 1e308 map was written"
+    expect 2 "small.bt: resolution 0.1 differs from --res 0.1000001" \
+      "$K" map --input p.xyz --res 0.1000001 --init-map small.bt --out-bt q.bt
+    mkdir -p rep/clouds && printf '0 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n' > rep/poses.txt
+    for i in 0 1; do printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty uint id\nend_header\n1 0 0 7\n1 0.5 0 7\n1 1 0 8\n' > rep/clouds/00000$i.ply; done
+    for model in robust knn; do
+      expect 2 "rep/clouds/000000.ply: insert_keyframe: map-point id 7 appears twice in one keyframe" \
+        "$K" map --input rep --res 0.1 --model $model
+    done
+    expect 2 "rep/clouds/000000.ply: KeyframeUnion: map-point id 7 appears twice" "$K" track --input rep --k 1 --out-stats st.txt
+    mkdir rep/c && expect 2 "rep/clouds/000000.ply: LiveMapper::add: map-point id 7 appears twice" \
+      "$K" map --input rep --model knn --corrections rep/c --res 0.1
+    # an empty map from clouds that hold points: a warning, exit 0
+    printf '9999 0 0\n' > far.xyz
+    "$K" map --input far.xyz --res 0.1 > out.txt 2> err.txt || fail "exit $?"
+    grep -q "far.xyz: warning: the map is empty: the 1 points of 1 clouds updated no voxel" err.txt || fail "no warning"
+    "$K" sim --out seq --seed 3 --keyframes 2 > /dev/null || fail "sim"
+    "$K" map --input seq --res 0.1 --model robust --min-views 3 > out.txt 2> err.txt || fail "exit $?"
+    grep -q "seq: warning: the map is empty: .* the robust model adds a map point's evidence only once --min-views" err.txt ||
+      fail "no warning for the robust model"
+    # eval without --against: n/a, not 0, and it says why
+    "$K" eval --ids seq --map small.bt > out.txt 2> err.txt || fail "eval"
+    grep -q "reference_kept n/a lost n/a" out.txt && grep -q "reference_kept and lost need --against" err.txt ||
+      fail "eval: $(cat out.txt err.txt)"
+    expect 2 "--keyframes 100000 with --drift would write about 76.2 GB, more than the 1.0 GB sim writes" \
+      timeout 5 "$K" sim --out big --keyframes 100000 --drift 0.1
+    [ ! -e big ] || fail "big/ written"
+    expect 2 "at most 64 maps fit one page; 'small.bt' is one too many" "$K" view $(for i in $(seq 65); do echo small.bt; done) -o v.html ;;
+  save_every_resumes)  # snapshots say which clouds they hold; resumed, the one run's map
+    "$K" sim --out seq --seed 3 --keyframes 12 > /dev/null || fail "sim"
+    expect 0 "" "$K" map --input seq --res 0.1 --count 7 --save-every 3 --out-bt part.bt --out-ot part.ot
+    for f in part.bt part.ot; do
+      "$K" info $f | grep -q "^note: map: clouds 0 to 6 of seq; continue with --first 7$" || fail "$f: no note"
+    done
+    expect 2 "--init-map part.ot holds clouds 0 to 6 of seq: continue with --first 7, not 5" \
+      "$K" map --input seq --init-map part.ot --first 5 --out-ot whole.ot
+    expect 0 "" "$K" map --input seq --init-map part.ot --first 7 --out-ot whole.ot --save-every 2
+    "$K" info whole.ot | grep -q "^note: map: clouds 0 to 11 of seq; continue with --first 12$" || fail "no note"
+    expect 0 "" "$K" map --input seq --res 0.1 --out-ot one.ot
+    "$K" convert whole.ot plain.ot > /dev/null && cmp plain.ot one.ot || fail "the resumed map is not the one run's" ;;
+  stale_temporaries_removed)  # a killed run's temporary goes at the next start; a live writer's stays
+    printf 'partial' > a.bt.tmp-Ab12Cd && touch -d '1 minute ago' a.bt.tmp-Ab12Cd
+    printf 'partial' > a.bt.tmp-Ef34Gh && touch -d '1 minute ago' a.bt.tmp-Ef34Gh
+    exec 9< a.bt.tmp-Ef34Gh && flock -n 9 || fail "flock"  # as a writer at work holds its temporary
+    expect 0 "" "$K" map --input p.xyz --res 0.1 --out-bt a.bt
+    [ ! -e a.bt.tmp-Ab12Cd ] || fail "the stale temporary is still there"
+    [ -e a.bt.tmp-Ef34Gh ] || fail "a locked temporary was removed"
+    exec 9<&-  # the writer is gone: its temporary is stale
+    expect 0 "" "$K" map --input p.xyz --res 0.1 --out-bt a.bt
+    no_temporaries ;;
   *) fail "unknown case $CASE" ;;
 esac
 echo PASS

@@ -11,6 +11,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <limits>
 #include <string>
 
 #include "config.hpp"
@@ -30,14 +32,23 @@ class Grid {
   /// own noise, so a smaller value is taken for a unit mistake.
   static constexpr double min_resolution = 1e-6;
 
-  /// resolution: voxel edge in metres; finite and >= min_resolution.
+  /// Largest accepted resolution: the key range, +-center voxels, still fits a float (the
+  /// coordinates points and rays are handled in): about 1e34 m for OcKey.
+  static constexpr double max_resolution =
+      static_cast<double>(std::numeric_limits<float>::max()) / static_cast<double>(Key::center);
+
+  /// resolution: voxel edge in metres; finite, in [min_resolution, max_resolution].
   explicit Grid(double resolution) : res_(resolution), inv_res_(1.0 / resolution) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", resolution);
     if (!(resolution > 0.0) || !std::isfinite(resolution) || !std::isfinite(inv_res_))
-      detail::invalid_argument("resolution must be a finite number > 0, got " +
-                               std::to_string(resolution));
+      detail::invalid_argument(std::string("resolution must be a finite number > 0, got ") + text);
     if (resolution < min_resolution)
-      detail::invalid_argument("resolution " + std::to_string(resolution) +
+      detail::invalid_argument(std::string("resolution ") + text +
                                " m is below the minimum of 1e-6 m (a unit mistake?)");
+    if (resolution > max_resolution)
+      detail::invalid_argument(std::string("resolution ") + text +
+                               " m is above the maximum: its key range would not fit a float");
     // Rounded to float through memory: GCC 12's SLP vectorizer at -O2 dropped the float round
     // trip of static_cast<float>(step * res * 0.5) where the walks' set-up computed it per border
     // (the border at 0.0 of a 0.05 m voxel came out 0 instead of -3.7e-10), which changed the

@@ -1,6 +1,7 @@
 #pragma once
 // ScanInserter: OctoMap's insertPointCloud(points, origin, max_range, discretize) on an
-// OccupancyMap, with the same map as result.
+// OccupancyMap, as insert_point_cloud(origin, points, max_range, discretize), with the same map as
+// result.
 //
 // Per point p (sensor at origin o):
 //   |p - o| <= max_range (or max_range < 0): the voxels from o up to p's voxel are free, p's voxel
@@ -62,6 +63,7 @@
 #include "../core/config.hpp"
 #include "../core/point3.hpp"
 #include "../core/point_traits.hpp"
+#include "../map/detail/brick_access.hpp"
 #include "../map/occupancy_map.hpp"
 #include "../raycast/dda.hpp"
 #include "../raycast/detail/fan_walk.hpp"
@@ -296,9 +298,10 @@ class ScanInserter {
       scratch(t).hashed.set_cap(limit ? (limit - elsewhere) / threads() : 0, limit, elsewhere);
     // Under a limit the first thread's scratch, which ends up holding every touched brick, also
     // counts the map bricks they will add: a scan too big for the limit stops sooner.
-    scratch(0).hashed.count_map_bricks(limit ? &map_->brick_index() : nullptr,
+    const detail::BrickReader<Key> bricks(*map_);
+    scratch(0).hashed.count_map_bricks(limit ? &bricks.brick_index() : nullptr,
                                        sizeof(typename map_type::Brick),
-                                       map_->bricks().capacity() - map_->num_bricks());
+                                       bricks.bricks().capacity() - map_->num_bricks());
     walk_hashed(o, rays);
     add_visits(st);
     detail::order_hashed<Key>(scratch_, threads(), order_, slots_, limit, in_map);

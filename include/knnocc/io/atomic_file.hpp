@@ -6,6 +6,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -55,6 +56,24 @@ inline mode_t new_file_mode() {
 }
 #endif
 
+// A temporary is locked (flock) from its creation until it is renamed or removed, so that
+// remove_stale_temporaries() can tell a killed writer's file from a live one.
+inline int lock_temporary(int fd) noexcept {
+#if KNNOCC_POSIX_FILES
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) return -1;
+  return ::dup(fd);  // shares the lock, which outlives the FILE that closes fd
+#else
+  (void)fd;
+  return -1;
+#endif
+}
+inline void release_lock(int& lock) noexcept {
+#if KNNOCC_POSIX_FILES
+  if (lock >= 0) ::close(lock);
+#endif
+  lock = -1;
+}
+
 class CommitGroupBase;
 inline CommitGroupBase*& current_group() {
   thread_local CommitGroupBase* group = nullptr;
@@ -62,14 +81,18 @@ inline CommitGroupBase*& current_group() {
 }
 
 /// A closed temporary waiting for its rename; removes it (and its signal registration) unless
-/// renamed.
+/// renamed. Holds the temporary's lock (see AtomicFile) until then.
 struct PendingFile {
   std::unique_ptr<std::string> tmp;  // stable c_str() for the signal registry
   std::string target;
   int slot = -1;
+  int lock = -1;  // a descriptor of the temporary holding its flock, or -1
   PendingFile() = default;
   PendingFile(PendingFile&& o) noexcept
-      : tmp(std::move(o.tmp)), target(std::move(o.target)), slot(std::exchange(o.slot, -1)) {}
+      : tmp(std::move(o.tmp)),
+        target(std::move(o.target)),
+        slot(std::exchange(o.slot, -1)),
+        lock(std::exchange(o.lock, -1)) {}
   PendingFile& operator=(PendingFile&&) = delete;
   ~PendingFile() { discard(); }
   void discard() noexcept {
@@ -78,6 +101,7 @@ struct PendingFile {
   }
   void release() noexcept {
     unregister_temporary(std::exchange(slot, -1));
+    release_lock(lock);
     tmp.reset();
   }
   void rename() {
@@ -113,9 +137,9 @@ inline void remove_temporaries_on_signal() {
   }
 }
 
-/// Writes to a new, uniquely named temporary file beside <path> (created exclusively, so a
+/// Writes to a new, uniquely named temporary file beside `path` (created exclusively, so a
 /// user's file is never taken over and concurrent writers of one path never share a file) and
-/// renames it over <path> on commit(): readers never see a half-written file. Without commit()
+/// renames it over `path` on commit(): readers never see a half-written file. Without commit()
 /// (e.g. an exception) the temporary is removed. A target that exists and is not a regular file
 /// (a device such as /dev/null, a FIFO) is written directly, never replaced; a symbolic link is
 /// followed, so the file it names is replaced and the link stays. A new file gets the usual
@@ -152,6 +176,7 @@ class AtomicFile {
       const int err = errno;
       throw Error(path_, "cannot create temporary file beside it: " + detail::errno_text(err));
     }
+    lock_ = detail::lock_temporary(fd);
     slot_ = detail::register_temporary(tmp_->c_str());
     (void)::fchmod(fd, mode);
     file_ = ::fdopen(fd, "wb");
@@ -202,6 +227,7 @@ class AtomicFile {
     pending.tmp = std::move(tmp_);
     pending.target = target_;
     pending.slot = std::exchange(slot_, -1);
+    pending.lock = std::exchange(lock_, -1);
     if (detail::CommitGroupBase* group = detail::current_group())
       group->defer(std::move(pending));
     else
@@ -212,6 +238,7 @@ class AtomicFile {
   void discard() noexcept {
     if (tmp_) std::remove(tmp_->c_str());
     detail::unregister_temporary(std::exchange(slot_, -1));
+    detail::release_lock(lock_);
     tmp_.reset();
   }
   [[noreturn]] void fail(const std::string& what) { fail_errno(what, errno); }
@@ -222,9 +249,43 @@ class AtomicFile {
   std::string path_, target_;
   std::unique_ptr<std::string> tmp_;
   int slot_ = -1;
+  int lock_ = -1;
   std::FILE* file_ = nullptr;
   bool direct_ = false;
 };
+
+/// Removes the temporaries that writers of `target` killed without a chance to clean up (SIGKILL,
+/// a power cut) left beside it: AtomicFile's "<name>.tmp-XXXXXX" files that no running process
+/// holds locked and that are older than a second. Returns how many it removed. For programs:
+/// knnocc calls it for each output before writing.
+inline std::size_t remove_stale_temporaries(const std::string& target) {
+  std::size_t removed = 0;
+#if KNNOCC_POSIX_FILES
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::path real(target);
+  if (fs::is_symlink(real, ec)) real = fs::canonical(real, ec);  // AtomicFile writes beside it
+  const fs::path tmpl(detail::temporary_template(real.string()));
+  const std::string prefix =
+      tmpl.filename().string().substr(0, tmpl.filename().string().size() - 6);
+  const fs::path dir = tmpl.has_parent_path() ? tmpl.parent_path() : fs::path(".");
+  const auto now = std::time(nullptr);
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() != prefix.size() + 6 || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const int fd = ::open(it->path().c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0) continue;
+    struct stat st;
+    if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) &&
+        st.st_mtime + 1 < now && ::unlink(it->path().c_str()) == 0)
+      ++removed;
+    ::close(fd);
+  }
+#else
+  (void)target;
+#endif
+  return removed;
+}
 
 /// Commits the AtomicFiles of one thread as a set: while the group is open, their commit() only
 /// closes them; commit() here renames them all, after every one was written completely. Without
@@ -249,8 +310,8 @@ class CommitGroup : public detail::CommitGroupBase {
   detail::CommitGroupBase* outer_;
 };
 
-/// A folder output built aside: files go into a fresh folder "<dir>.tmp-XXXXXX" beside <dir>
-/// (path()), and commit() renames it to <dir>. <dir> must not exist or be an empty folder
+/// A folder output built aside: files go into a fresh folder "`dir`.tmp-XXXXXX" beside `dir`
+/// (path()), and commit() renames it to `dir`. `dir` must not exist or be an empty folder
 /// (replaced), or a folder the `replaceable` predicate accepts (moved aside, and removed once the
 /// new folder is in place); any other non-empty folder is refused in the constructor, before any
 /// work. Without commit()
@@ -324,7 +385,7 @@ class StagingDir {
     tmp_.reset();
   }
 
-  /// Throws unless <dir> is absent, an empty folder, or a folder `replaceable` accepts.
+  /// Throws unless `dir` is absent, an empty folder, or a folder `replaceable` accepts.
   static void check_target(const std::string& dir, Replaceable replaceable = nullptr) {
     namespace fs = std::filesystem;
     std::error_code ec;

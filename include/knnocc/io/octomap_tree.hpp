@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "../core/key.hpp"
+#include "../map/detail/brick_access.hpp"
 #include "../map/occupancy_map.hpp"
 #include "atomic_file.hpp"
 #include "detail/bytes.hpp"
@@ -62,6 +63,7 @@ struct OctreeInfo {
   std::uint64_t occupied_voxels = 0, free_voxels = 0;  ///< finest-level voxels the leaves cover
   int min_leaf_depth = 0, max_leaf_depth = 0;          ///< 0 when there are no leaves
   double min[3] = {0, 0, 0}, max[3] = {0, 0, 0};       ///< box of the leaves (metres)
+  std::string note;  ///< a "# knnocc <note>" header comment's note (see encode_bt), or empty
 };
 
 namespace detail {
@@ -99,12 +101,12 @@ inline void put_octree_leaf(OccupancyMap<OcKey>& map, int d, const NodeCorner& c
   if (span >= static_cast<std::uint32_t>(kBrickEdge)) {
     const std::int64_t bricks = span >> kBrickBits;
     const std::int64_t b0[3] = {c.k[0] >> kBrickBits, c.k[1] >> kBrickBits, c.k[2] >> kBrickBits};
+    knnocc::detail::BrickWriter<OcKey> w(map);
     for (std::int64_t x = 0; x < bricks; ++x)
       for (std::int64_t y = 0; y < bricks; ++y)
         for (std::int64_t z = 0; z < bricks; ++z) {
-          auto& b =
-              map.brick_at(map.brick_slot(layout::pack_brick(b0[0] + x, b0[1] + y, b0[2] + z)));
-          map.fill_brick(b, v);
+          auto& b = w.brick_at(w.brick_slot(layout::pack_brick(b0[0] + x, b0[1] + y, b0[2] + z)));
+          w.fill_brick(b, v);
         }
     return;
   }
@@ -130,11 +132,12 @@ class OctreeEncoder {
   using Map = OccupancyMap<OcKey>;
   using Brick = Map::Brick;
 
-  explicit OctreeEncoder(const Map& map) : map_(map) {}
+  /// `note`: the text of a "# knnocc <note>" header comment (made printable), or empty.
+  OctreeEncoder(const Map& map, const std::string& note) : map_(map), note_(note) {}
 
   /// The whole file: header and node stream.
   std::string encode() {
-    const auto& bricks = map_.bricks();
+    const auto& bricks = knnocc::detail::brick_reader(map_).bricks();
     order_.clear();
     order_.reserve(bricks.size());
     for (std::size_t i = 0; i < bricks.size(); ++i) {
@@ -153,6 +156,7 @@ class OctreeEncoder {
     if (!order_.empty()) tree_node(0, 0, order_.size(), root);
 
     std::string out = std::string(Full ? kOtFirstLine : kBtFirstLine) + "\n" + kOctreeComment +
+                      (note_.empty() ? "" : kNotePrefix + printable(note_) + "\n") +
                       "id OcTree\nsize " + std::to_string(nodes_) + "\nres " +
                       format_resolution(map_.resolution()) + "\ndata\n";
     out += data_;
@@ -249,7 +253,8 @@ class OctreeEncoder {
 
   // Depth d < 13 over the bricks order_[lo, hi), which all lie in this node.
   bool tree_node(int d, std::size_t lo, std::size_t hi, Summary& out) {
-    if (d == kBrickDepth) return brick_node(map_.bricks()[order_[lo].index], out);
+    if (d == kBrickDepth)
+      return brick_node(knnocc::detail::brick_reader(map_).bricks()[order_[lo].index], out);
     const int shift = 3 * (kBrickDepth - 1 - d);
     std::size_t cur = lo;
     return node(
@@ -296,6 +301,7 @@ class OctreeEncoder {
   }
 
   const Map& map_;
+  std::string note_;
   std::vector<Entry> order_;
   std::string data_;
   std::uint64_t nodes_ = 0;
@@ -325,6 +331,7 @@ inline OctreeInfo inspect_octree(const std::string& path, const OccupancyParams&
       });
   info.binary = h.binary;
   info.id = h.id;
+  info.note = h.note;
   info.resolution = h.resolution;
   info.nodes = h.size;
   if (info.occupied_leaves + info.free_leaves == 0) {
@@ -375,23 +382,27 @@ inline OccupancyMap<OcKey> read_octree(const std::string& path,
   return map;
 }
 
-/// The bytes of `map` as liboctomap's OcTree::writeBinary would write them (.bt).
-inline std::string encode_bt(const OccupancyMap<OcKey>& map) {
-  return detail::OctreeEncoder<false>(map).encode();
+/// The bytes of `map` as liboctomap's OcTree::writeBinary would write them (.bt). A `note` adds
+/// the header comment "# knnocc <note>" (what wrote the file; OctoMap's readers skip comments,
+/// inspect_octree() returns it as OctreeInfo::note); without one the bytes are liboctomap's.
+inline std::string encode_bt(const OccupancyMap<OcKey>& map, const std::string& note = {}) {
+  return detail::OctreeEncoder<false>(map, note).encode();
 }
-/// The bytes of `map` as liboctomap's OcTree::write would write them (.ot).
-inline std::string encode_ot(const OccupancyMap<OcKey>& map) {
-  return detail::OctreeEncoder<true>(map).encode();
+/// The bytes of `map` as liboctomap's OcTree::write would write them (.ot); `note` as encode_bt.
+inline std::string encode_ot(const OccupancyMap<OcKey>& map, const std::string& note = {}) {
+  return detail::OctreeEncoder<true>(map, note).encode();
 }
 
-inline void write_bt(const std::string& path, const OccupancyMap<OcKey>& map) {
+inline void write_bt(const std::string& path, const OccupancyMap<OcKey>& map,
+                     const std::string& note = {}) {
   AtomicFile out(path);
-  out.write(encode_bt(map));
+  out.write(encode_bt(map, note));
   out.commit();
 }
-inline void write_ot(const std::string& path, const OccupancyMap<OcKey>& map) {
+inline void write_ot(const std::string& path, const OccupancyMap<OcKey>& map,
+                     const std::string& note = {}) {
   AtomicFile out(path);
-  out.write(encode_ot(map));
+  out.write(encode_ot(map, note));
   out.commit();
 }
 

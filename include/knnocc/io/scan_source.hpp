@@ -65,6 +65,8 @@ class ScanSource {
   const std::string& path() const { return path_; }
   /// The whole graph when the source is a .graph file, else null.
   const ScanGraph* graph() const { return graph_.get(); }
+  /// The sequence when the source is a sequence folder, else null.
+  const Sequence* sequence() const { return sequence_ ? &*sequence_ : nullptr; }
   /// "sequence folder", "scan graph" or "point file".
   const char* kind() const {
     return sequence_ ? "sequence folder" : graph_ ? "scan graph" : "point file";

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -67,11 +68,8 @@ class Sequence {
                   "scanner's frame name the folder clouds/");
     }
     if (cloud_dir.filename() == "velodyne") {
-      const Eigen::Isometry3d tr = read_kitti_calib_tr(calib.string());
-      for (Pose& p : seq.poses_) {
-        p.t = p.q * tr.translation() + p.t;
-        p.q = (p.q * Eigen::Quaterniond(tr.rotation())).normalized();
-      }
+      seq.tr_ = read_kitti_calib_tr(calib.string());
+      for (Pose& p : seq.poses_) p = seq.scanner_pose(p);
     }
     for (fs::directory_iterator it(cloud_dir, ec), end; !ec && it != end; it.increment(ec)) {
       std::error_code type_ec;  // a file vanishing mid-listing is not a listing error
@@ -110,6 +108,15 @@ class Sequence {
     return clouds_[i];
   }
 
+  /// A pose given as poses.txt gives it (e.g. a corrected pose) as pose() gives it: times
+  /// calib.txt's Tr in a velodyne/ sequence, unchanged otherwise.
+  Pose scanner_pose(Pose p) const {
+    if (!tr_) return p;
+    p.t = p.q * tr_->translation() + p.t;
+    p.q = (p.q * Eigen::Quaterniond(tr_->rotation())).normalized();
+    return p;
+  }
+
   // Cloud i in the sensor frame.
   Cloud load_cloud(std::size_t i) const { return read_points(cloud_path(i)); }
 
@@ -126,6 +133,7 @@ class Sequence {
   std::string dir_;
   std::vector<Pose> poses_;
   std::vector<std::string> clouds_;
+  std::optional<Eigen::Isometry3d> tr_;  // calib.txt's Tr (velodyne/ sequences)
 };
 
 // The points of a keyframe within max_range of its sensor (max_range <= 0: all of them), in the

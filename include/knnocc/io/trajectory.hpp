@@ -40,39 +40,35 @@ struct Pose {
   }
 };
 
-inline std::vector<Pose> read_poses(const std::string& path) {
-  const detail::FileBuffer buf = detail::read_file(path);
-  std::vector<Pose> poses;
-  detail::for_each_line(buf.data(), buf.end(), [&](std::size_t line, const char* b, const char* e) {
-    const std::string at = "line " + std::to_string(line) + ": ";
-    double v[9];
-    // Ask for one more than needed so a line with extra columns is caught.
-    const std::size_t n = detail::scan_line_numbers(path, line, b, e, v, 9, true);
-    if (n == 0) return;  // blank or comment-only line
-    if (n != 8) {
-      throw Error(path, at + "expected 8 numbers (stamp tx ty tz qx qy qz qw), found " +
-                            (n > 8 ? std::string("more") : std::to_string(n)));
-    }
-    for (std::size_t k = 0; k < 8; ++k) {
-      if (!std::isfinite(v[k])) throw Error(path, at + "non-finite number");
-    }
-    Pose pose;
-    pose.stamp = v[0];
-    pose.t = Eigen::Vector3d(v[1], v[2], v[3]);
-    pose.q = Eigen::Quaterniond(v[7], v[4], v[5], v[6]);  // (w, x, y, z) from "qx qy qz qw"
-    const double norm = pose.q.norm();
-    if (!(std::abs(norm - 1.0) <= 1e-3)) {
-      char text[32];
-      std::snprintf(text, sizeof text, "%g", norm);
-      throw Error(path, at + "quaternion norm " + text + " is not 1");
-    }
-    pose.q.normalize();
-    poses.push_back(pose);
-  });
-  return poses;
-}
-
 namespace detail {
+
+// A TUM line "stamp tx ty tz qx qy qz qw" into `pose`; false for a blank or comment-only line.
+inline bool parse_tum_line(const std::string& path, std::size_t line, const char* b, const char* e,
+                           Pose& pose) {
+  const std::string at = "line " + std::to_string(line) + ": ";
+  double v[9];
+  // Ask for one more than needed so a line with extra columns is caught.
+  const std::size_t n = scan_line_numbers(path, line, b, e, v, 9, true);
+  if (n == 0) return false;
+  if (n != 8) {
+    throw Error(path, at + "expected 8 numbers (stamp tx ty tz qx qy qz qw), found " +
+                          (n > 8 ? std::string("more") : std::to_string(n)));
+  }
+  for (std::size_t k = 0; k < 8; ++k) {
+    if (!std::isfinite(v[k])) throw Error(path, at + "non-finite number");
+  }
+  pose.stamp = v[0];
+  pose.t = Eigen::Vector3d(v[1], v[2], v[3]);
+  pose.q = Eigen::Quaterniond(v[7], v[4], v[5], v[6]);  // (w, x, y, z) from "qx qy qz qw"
+  const double norm = pose.q.norm();
+  if (!(std::abs(norm - 1.0) <= 1e-3)) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", norm);
+    throw Error(path, at + "quaternion norm " + text + " is not 1");
+  }
+  pose.q.normalize();
+  return true;
+}
 
 // A pose from a row-major 3x4 [R | t]; "" on success, else the problem.
 inline std::string pose_from_matrix(const double m[12], Pose& pose) {
@@ -95,6 +91,24 @@ inline std::string pose_from_matrix(const double m[12], Pose& pose) {
   return {};
 }
 
+// A KITTI line (12 numbers, [R | t] row by row) into `pose`, whose stamp becomes `index`; false
+// for a blank or comment-only line.
+inline bool parse_kitti_line(const std::string& path, std::size_t line, const char* b,
+                             const char* e, std::size_t index, Pose& pose) {
+  const std::string at = "line " + std::to_string(line) + ": ";
+  double v[13];
+  const std::size_t n = scan_line_numbers(path, line, b, e, v, 13, true);
+  if (n == 0) return false;
+  if (n != 12) {
+    throw Error(path, at + "expected 12 numbers (a 3x4 pose matrix, row by row), found " +
+                          (n > 12 ? std::string("more") : std::to_string(n)));
+  }
+  const std::string problem = pose_from_matrix(v, pose);
+  if (!problem.empty()) throw Error(path, at + problem);
+  pose.stamp = static_cast<double>(index);
+  return true;
+}
+
 inline void append_number(std::string& out, double v) {
   char text[32];
   std::snprintf(text, sizeof text, "%.17g", v);  // reads back to the same double
@@ -103,38 +117,54 @@ inline void append_number(std::string& out, double v) {
 
 }  // namespace detail
 
+inline std::vector<Pose> read_poses(const std::string& path) {
+  const detail::FileBuffer buf = detail::read_file(path);
+  std::vector<Pose> poses;
+  detail::for_each_line(buf.data(), buf.end(), [&](std::size_t line, const char* b, const char* e) {
+    Pose pose;
+    if (detail::parse_tum_line(path, line, b, e, pose)) poses.push_back(pose);
+  });
+  return poses;
+}
+
 // KITTI odometry poses: one "r11 r12 r13 tx r21 r22 r23 ty r31 r32 r33 tz" line per scan.
 inline std::vector<Pose> read_kitti_poses(const std::string& path) {
   const detail::FileBuffer buf = detail::read_file(path);
   std::vector<Pose> poses;
   detail::for_each_line(buf.data(), buf.end(), [&](std::size_t line, const char* b, const char* e) {
-    const std::string at = "line " + std::to_string(line) + ": ";
-    double v[13];
-    const std::size_t n = detail::scan_line_numbers(path, line, b, e, v, 13, true);
-    if (n == 0) return;
-    if (n != 12) {
-      throw Error(path, at + "expected 12 numbers (a 3x4 pose matrix, row by row), found " +
-                            (n > 12 ? std::string("more") : std::to_string(n)));
-    }
     Pose pose;
-    const std::string problem = detail::pose_from_matrix(v, pose);
-    if (!problem.empty()) throw Error(path, at + problem);
-    pose.stamp = static_cast<double>(poses.size());
-    poses.push_back(pose);
+    if (detail::parse_kitti_line(path, line, b, e, poses.size(), pose)) poses.push_back(pose);
   });
   return poses;
 }
 
-// TUM (8 values per line) or KITTI (12 values per line), decided by the first data line.
-inline std::vector<Pose> read_trajectory(const std::string& path) {
-  const detail::FileBuffer buf = detail::read_file(path);
-  std::size_t values = 0;
-  detail::for_each_line(buf.data(), buf.end(), [&](std::size_t line, const char* b, const char* e) {
-    if (values != 0) return;
-    double v[13];
-    values = detail::scan_line_numbers(path, line, b, e, v, 13, true);
+// TUM (8 values per line) or KITTI (12 values per line), decided by the first data line. The
+// file is read piece by piece: a data line after `max_poses` poses is an io::Error naming it, and
+// the rest of the file is not read (a huge file where a few poses belong costs nothing). `lines`,
+// when given, gets each pose's line number.
+inline std::vector<Pose> read_trajectory(const std::string& path,
+                                         std::size_t max_poses = static_cast<std::size_t>(-1),
+                                         std::vector<std::size_t>* lines = nullptr) {
+  std::vector<Pose> poses;
+  std::size_t values = 0;  // 12: KITTI, else TUM; 0 until the first data line
+  if (lines) lines->clear();
+  detail::for_each_file_line(path, [&](std::size_t line, const char* b, const char* e) {
+    if (values == 0) {
+      double v[13];
+      values = detail::scan_line_numbers(path, line, b, e, v, 13, true);
+      if (values == 0) return;
+    }
+    Pose pose;
+    const bool data = values == 12 ? detail::parse_kitti_line(path, line, b, e, poses.size(), pose)
+                                   : detail::parse_tum_line(path, line, b, e, pose);
+    if (!data) return;
+    if (poses.size() == max_poses)
+      throw Error(path, "line " + std::to_string(line) + ": more poses than the " +
+                            std::to_string(max_poses) + " expected");
+    poses.push_back(pose);
+    if (lines) lines->push_back(line);
   });
-  return values == 12 ? read_kitti_poses(path) : read_poses(path);
+  return poses;
 }
 
 inline void write_tum_poses(const std::string& path, const std::vector<Pose>& poses) {

@@ -1,7 +1,9 @@
 #pragma once
 // Affected-point policies: which existing map points need their k-NN recomputed after a change
-// (paper section 3.2, "affected points"). A policy appends old point indices to `out` through
-// the tracker's policy interface (KnnTracker, section "policy interface").
+// (paper section 3.2, "affected points"). A policy's collect(tracker, marks) reads the change and
+// the cloud through the tracker's const queries (KnnTracker, section "policy interface") and names
+// the affected points through `marks` (KnnTracker::Marks: mark(q), offer(q, p)), which only the
+// tracker's apply() can make.
 //
 // ExactReverseKnn (default) is exact, with neighbours ordered by (distance, id):
 //   - inserting p changes q's k-NN iff (d(q,p), id_p) < (d_k(q), id_k(q)), or q has fewer than k
@@ -26,11 +28,11 @@ namespace knnocc {
 struct ExactReverseKnn {
   void validate() const {}
 
-  template <class Tracker>
-  void collect(Tracker& t, std::vector<std::uint32_t>& out) const {
+  template <class Tracker, class Marks>
+  void collect(const Tracker& t, Marks& marks) const {
     for (const std::uint32_t r : t.removed_indices())
       for (const std::uint32_t q : t.reverse_neighbours(r))
-        if (t.alive(q) && !t.is_new(q)) t.mark(q, out);
+        if (t.alive(q) && !t.is_new(q)) marks.mark(q);
 
     if (t.size() == t.new_indices().size()) return;  // no old point left to affect
     std::vector<std::uint32_t> candidates;
@@ -40,7 +42,7 @@ struct ExactReverseKnn {
       auto test = [&](std::uint32_t q) {
         if (t.is_new(q) || !t.alive(q)) return;
         if (t.incomplete(q) || closer(dist2(t.position_at(q), pp), pid, t.dk2(q), t.dk_id(q)))
-          t.offer(q, p, out);
+          marks.offer(q, p);
       };
       t.ball_candidates(pp, candidates);
       for (const std::uint32_t q : candidates) test(q);
@@ -60,8 +62,8 @@ struct PaperAnnulus {
       detail::invalid_argument("PaperAnnulus: s_max / dr must be at most 1e6");
   }
 
-  template <class Tracker>
-  void collect(Tracker& t, std::vector<std::uint32_t>& out) const {
+  template <class Tracker, class Marks>
+  void collect(const Tracker& t, Marks& marks) const {
     std::vector<Point3d> centres;
     for (const std::uint32_t p : t.new_indices()) centres.push_back(t.position_at(p));
     for (const std::uint32_t p : t.removed_indices()) centres.push_back(t.position_at(p));
@@ -83,7 +85,7 @@ struct PaperAnnulus {
           const double s_old = t.s_at(q);
           const bool same = s_new == s_old || (std::isnan(s_new) && std::isnan(s_old));
           if (!same) {
-            t.mark(q, out);
+            marks.mark(q);
             increase = true;
           }
         }

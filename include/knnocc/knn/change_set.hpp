@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -80,12 +81,28 @@ inline ChangeSet diff_by_id(const std::unordered_map<std::uint64_t, Point3d>& pr
   return cs;
 }
 
+namespace detail {
+/// std::invalid_argument (message starting with `who`) when an id appears twice among one
+/// keyframe's ids: a keyframe observes a map point once (ORB-SLAM never repeats one), so a repeat
+/// is a broken input, not a second view. `scratch` is reused between calls.
+inline void check_distinct_ids(const char* who, const std::vector<std::uint64_t>& ids,
+                               std::vector<std::uint64_t>& scratch) {
+  scratch.assign(ids.begin(), ids.end());
+  std::sort(scratch.begin(), scratch.end());
+  const auto twin = std::adjacent_find(scratch.begin(), scratch.end());
+  if (twin != scratch.end())
+    invalid_argument(std::string(who) + ": map-point id " + std::to_string(*twin) +
+                     " appears twice in one keyframe (a keyframe observes a map point once)");
+}
+}  // namespace detail
+
 /// The map point cloud as the union of keyframe observations (how the paper builds it from
 /// ORB-SLAM keyframes): a point with an id joins once, at its first observed position; without
 /// ids every point of every keyframe is a new map point (ids 0, 1, 2, ... in arrival order).
 /// A sequence must either always or never carry ids (mixing is refused: generated ids could
-/// collide with real ones). Points with a NaN/Inf coordinate are skipped and counted; an id first
-/// seen that way joins at its first finite observation.
+/// collide with real ones), and one keyframe never holds an id twice. Points with a NaN/Inf
+/// coordinate are skipped and counted; an id first seen that way joins at its first finite
+/// observation.
 class KeyframeUnion {
  public:
   /// world: one keyframe's points in the world frame; ids: one per point, or empty.
@@ -99,6 +116,7 @@ class KeyframeUnion {
         detail::invalid_argument("KeyframeUnion: keyframes with and without ids are mixed");
       if (!ids.empty() && ids.size() != world.size())
         detail::invalid_argument("KeyframeUnion: one id per point expected");
+      detail::check_distinct_ids("KeyframeUnion", ids, scratch_);
     }
     ChangeSet cs;
     if (map_ids) map_ids->assign(world.size(), kNoId);
@@ -120,6 +138,7 @@ class KeyframeUnion {
   enum Mode { kUnknown, kYes, kNo };
   Mode with_ids_ = kUnknown;
   std::unordered_set<std::uint64_t> seen_;
+  std::vector<std::uint64_t> scratch_;
   std::uint64_t next_id_ = 0;
   std::size_t skipped_nonfinite_ = 0;
 };

@@ -107,7 +107,8 @@ class KnnTracker {
     points_.flush();
 
     // Affected points, judged against the state before this change.
-    policy_.collect(*this, recompute_);
+    Marks marks(*this, recompute_);
+    policy_.collect(static_cast<const KnnTracker&>(*this), marks);
 
     for (const index_type j : new_) {
       points_.knn(j, params_.k, scratch_);
@@ -212,21 +213,23 @@ class KnnTracker {
     points_.radius(c, r2, out);
   }
   bool marked(index_type i) const { return marked_[i] != 0; }
-  /// i's k-NN must be searched again (it may have lost a neighbour, or the policy cannot tell).
-  void mark(index_type i, std::vector<index_type>& out) {
-    needs_query_[i] = 1;
-    if (marked_[i]) return;
-    marked_[i] = 1;
-    out.push_back(i);
-  }
-  /// New point p beats i's k-th neighbour; unless i is also marked, its new k-NN are the best k
-  /// of its old ones and the points offered to it.
-  void offer(index_type i, index_type p, std::vector<index_type>& out) {
-    offers_.emplace_back(i, p);
-    if (marked_[i]) return;
-    marked_[i] = 1;
-    out.push_back(i);
-  }
+
+  /// What an affected-point policy may change during apply(): which old points get new k-NN.
+  /// Only apply() makes one, so nothing outside a policy's collect() can mark a point.
+  class Marks {
+   public:
+    /// q's k-NN must be searched again (it may have lost a neighbour, or the policy cannot tell).
+    void mark(index_type q) { t_->mark(q, *out_); }
+    /// New point p beats q's k-th neighbour; unless q is also marked, its new k-NN are the best k
+    /// of its old ones and the points offered to it.
+    void offer(index_type q, index_type p) { t_->offer(q, p, *out_); }
+
+   private:
+    friend class KnnTracker;
+    Marks(KnnTracker& t, std::vector<index_type>& out) : t_(&t), out_(&out) {}
+    KnnTracker* t_;
+    std::vector<index_type>* out_;
+  };
   /// s of point i against the current cloud, without storing anything.
   double peek_s(index_type i) const {
     std::vector<Neighbor> nb;
@@ -235,6 +238,20 @@ class KnnTracker {
   }
 
  private:
+  // Marks::mark and Marks::offer (a policy's collect()).
+  void mark(index_type i, std::vector<index_type>& out) {
+    needs_query_[i] = 1;
+    if (marked_[i]) return;
+    marked_[i] = 1;
+    out.push_back(i);
+  }
+  void offer(index_type i, index_type p, std::vector<index_type>& out) {
+    offers_.emplace_back(i, p);
+    if (marked_[i]) return;
+    marked_[i] = 1;
+    out.push_back(i);
+  }
+
   // Beyond 1e150 m squared distances overflow to +inf and the trees could not order them.
   static bool finite(const Point3d& p) {
     return std::fabs(p.x) <= 1e150 && std::fabs(p.y) <= 1e150 && std::fabs(p.z) <= 1e150;

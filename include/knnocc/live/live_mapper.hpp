@@ -44,6 +44,7 @@
 #include "../core/point3.hpp"
 #include "../knn/change_set.hpp"
 #include "../map/brick.hpp"
+#include "../map/detail/brick_access.hpp"
 #include "../mapper.hpp"
 #include "keyframe_store.hpp"
 #include "rigid_pose.hpp"
@@ -93,6 +94,34 @@ class LiveMapper {
   /// Bytes held by the stored keyframes (the map's own memory: map().memory_usage()).
   std::size_t keyframe_memory() const { return store_.memory_usage(); }
 
+  /// The points of the current keyframes at their current poses as a from-scratch Mapper counts
+  /// them (ScanStats points, nonfinite, out_of_range, beyond_max_range, summed): e.g. the points a
+  /// correction moved outside the key range, which the map holds no update from.
+  ScanStats point_counts() const {
+    ScanStats s;
+    for (const keyframe_type& kf : store_.frames()) {
+      const Point3f o = detail::to_point3f(pose_traits<Pose>::origin(kf.pose));
+      for (const Point3f& p : kf.points) {
+        ++s.points;
+        const Point3f q = detail::to_point3f(pose_traits<Pose>::to_world(kf.pose, p));
+        switch (detail::endpoint_fate(mapper_.map().grid(), q, o, options_.max_range)) {
+          case detail::EndpointFate::nonfinite:
+            ++s.nonfinite;
+            break;
+          case detail::EndpointFate::beyond_max_range:
+            ++s.beyond_max_range;
+            break;
+          case detail::EndpointFate::out_of_range:
+            ++s.out_of_range;
+            break;
+          case detail::EndpointFate::inserted:
+            break;
+        }
+      }
+    }
+    return s;
+  }
+
   /// Bounds the memory of the map (OccupancyMap::set_memory_limit; 0: no bound), now and of every
   /// map built later: rebuilds and the scratch maps of regional replays. An operation that would
   /// pass it throws MemoryLimitError; the keyframes then hold the operation's result but the map
@@ -106,7 +135,8 @@ class LiveMapper {
   /// Adds keyframe `id` (new id) seen from `pose`; `points` in the sensor frame; `ids` one
   /// map-point id per point or empty (k-NN model: a sequence gives ids always or never; the
   /// OctoMap model ignores them). std::invalid_argument, with nothing changed, on a known id, a
-  /// non-finite pose origin, an id count that does not match, id 2^64-1, or ids mixed.
+  /// non-finite pose origin, an id count that does not match, id 2^64-1, an id repeated within
+  /// the keyframe, or ids mixed.
   void add(std::uint64_t id, const Pose& pose, std::vector<Point3f> points,
            std::vector<std::uint64_t> ids = {}) {
     if (store_.contains(id)) detail::invalid_argument("LiveMapper::add: keyframe id already added");
@@ -117,6 +147,8 @@ class LiveMapper {
       for (const std::uint64_t m : ids)
         if (m == KeyframeUnion::kNoId)
           detail::invalid_argument("LiveMapper::add: id 2^64-1 is reserved");
+      std::vector<std::uint64_t> scratch;
+      detail::check_distinct_ids("LiveMapper::add", ids, scratch);
       if (!points.empty() && ((ids.empty() && with_ids_ > 0) || (!ids.empty() && without_ids_ > 0)))
         detail::invalid_argument("LiveMapper::add: keyframes with and without ids are mixed");
       if (!points.empty()) ++(ids.empty() ? without_ids_ : with_ids_);
@@ -128,9 +160,9 @@ class LiveMapper {
     kf.pose = pose;
     kf.points = std::move(points);
     kf.ids = std::move(ids);
-    to_world(kf);
-    kf.reach = reach();
-    insert(mapper_, kf);
+    const WorldKeyframe w = to_world(kf);
+    kf.reach = reach(w);
+    insert(mapper_, kf, w);
     store_.push_back(std::move(kf));
     last_ = LiveUpdate{1, 1, 0, false};
   }
@@ -165,8 +197,7 @@ class LiveMapper {
       return;
     }
     for (const std::size_t i : moved) {  // where it is now
-      to_world(store_[i]);
-      store_[i].reach = reach();
+      store_[i].reach = reach(to_world(store_[i]));
       region.push_back(store_[i].reach);
     }
     replay(region);
@@ -196,9 +227,9 @@ class LiveMapper {
     mapper_type fresh(resolution_, model_, options_);
     fresh.map().set_memory_limit(memory_limit_);
     for (std::size_t i = 0; i < store_.size(); ++i) {
-      to_world(store_[i]);
-      if constexpr (!uses_map_cloud) store_[i].reach = reach();
-      insert(fresh, store_[i]);
+      const WorldKeyframe w = to_world(store_[i]);
+      if constexpr (!uses_map_cloud) store_[i].reach = reach(w);
+      insert(fresh, store_[i], w);
     }
     mapper_ = std::move(fresh);
     last_.replayed = store_.size();
@@ -213,20 +244,26 @@ class LiveMapper {
     if (!is_finite(o)) detail::invalid_argument("LiveMapper: the pose's origin is not finite");
   }
 
-  // world_ and origin_: kf's points as a from-scratch Mapper receives them.
-  void to_world(const keyframe_type& kf) {
-    origin_ = pose_traits<Pose>::origin(kf.pose);
-    world_.resize(kf.points.size());
+  // A keyframe as a from-scratch Mapper receives it: sensor origin and world-frame points.
+  struct WorldKeyframe {
+    Point3d origin;
+    std::vector<Point3d> points;
+  };
+  static WorldKeyframe to_world(const keyframe_type& kf) {
+    WorldKeyframe w{pose_traits<Pose>::origin(kf.pose), std::vector<Point3d>(kf.points.size())};
     for (std::size_t j = 0; j < kf.points.size(); ++j)
-      world_[j] = pose_traits<Pose>::to_world(kf.pose, kf.points[j]);
+      w.points[j] = pose_traits<Pose>::to_world(kf.pose, kf.points[j]);
+    return w;
   }
-  BrickBox reach() const { return reach_of<Key>(origin_, world_, resolution_, options_.max_range); }
-  // Inserts the keyframe loaded by to_world().
-  void insert(mapper_type& m, const keyframe_type& kf) {
+  BrickBox reach(const WorldKeyframe& w) const {
+    return reach_of<Key>(w.origin, w.points, resolution_, options_.max_range);
+  }
+  // `w`: to_world(kf), or part of its points (a regional replay).
+  static void insert(mapper_type& m, const keyframe_type& kf, const WorldKeyframe& w) {
     if constexpr (uses_map_cloud)
-      m.insert_keyframe(origin_, world_, kf.ids);
+      m.insert_keyframe(w.origin, w.points, kf.ids);
     else
-      m.insert_keyframe(origin_, world_);
+      m.insert_keyframe(w.origin, w.points);
   }
 
   void update(const std::vector<BrickBox>& region) {
@@ -261,24 +298,24 @@ class LiveMapper {
     mapper_type scratch(resolution_, model_, options_);
     scratch.map().set_memory_limit(memory_limit_);
     for (const std::size_t i : candidates) {
-      to_world(store_[i]);
+      WorldKeyframe w = to_world(store_[i]);
       // Only rays that can reach the region: the others change none of its voxels (one update
       // per voxel per scan, decided by the rays and end points in that voxel alone).
-      const RayReach ray(origin_, options_.max_range);
+      const RayReach ray(w.origin, options_.max_range);
       std::size_t kept = 0;
-      for (const Point3d& p : world_) {
+      for (const Point3d& p : w.points) {
         double lo[3], hi[3];
         if (!ray.extent(p, lo, hi)) continue;
         const BrickBox b = detail::brick_box<Key>(lo, hi, resolution_);
         if (!b.intersects(all)) continue;
         for (const BrickBox& r : region)
           if (b.intersects(r)) {
-            world_[kept++] = p;
+            w.points[kept++] = p;
             break;
           }
       }
-      world_.resize(kept);
-      insert(scratch, store_[i]);
+      w.points.resize(kept);
+      insert(scratch, store_[i], w);
     }
     last_.replayed = candidates.size();
     const map_type& from = scratch.map();
@@ -293,14 +330,16 @@ class LiveMapper {
     };
     // Bricks the replay produced, then bricks of the map the replay has none of (only changed
     // keyframes reached them before: they become unknown).
-    for (const auto& b : from.bricks())
+    detail::BrickWriter<Key> writer(to);
+    const detail::BrickReader<Key> old(to), replayed(from);
+    for (const auto& b : replayed.bricks())
       if (in_region(b.coord)) {
-        to.copy_brick_from(from, b.coord);
+        writer.copy_brick_from(from, b.coord);
         ++last_.bricks;
       }
     auto clear_if_stale = [&](std::uint64_t coord) {
-      if (from.find_brick(coord) || !in_region(coord)) return;
-      to.copy_brick_from(from, coord);
+      if (replayed.find_brick(coord) || !in_region(coord)) return;
+      writer.copy_brick_from(from, coord);
       ++last_.bricks;
     };
     for (const BrickBox& r : region) {
@@ -309,12 +348,12 @@ class LiveMapper {
           for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
             for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) {
               const std::uint64_t c = layout::pack_brick(x, y, z);
-              const auto* b = to.find_brick(c);
+              const auto* b = old.find_brick(c);
               if (b && b->known.any()) clear_if_stale(c);
             }
       } else {
-        for (std::size_t s = 0; s < to.bricks().size(); ++s) {
-          const auto& b = to.bricks()[s];
+        for (std::size_t s = 0; s < old.bricks().size(); ++s) {
+          const auto& b = old.bricks()[s];
           if (b.known.any()) clear_if_stale(b.coord);
         }
       }
@@ -329,8 +368,6 @@ class LiveMapper {
   KeyframeStore<Pose> store_;
   std::size_t with_ids_ = 0, without_ids_ = 0;  // keyframes with points, by kind (k-NN model)
   LiveUpdate last_;
-  Point3d origin_;
-  std::vector<Point3d> world_;
 };
 
 }  // namespace knnocc

@@ -62,6 +62,13 @@ struct VoxelCounts {
   std::size_t known() const { return occupied + free; }
 };
 
+namespace detail {
+template <class Key>
+class BrickWriter;
+template <class Key>
+class BrickReader;
+}  // namespace detail
+
 template <class Key = OcKey>
 class OccupancyMap {
  public:
@@ -174,34 +181,6 @@ class OccupancyMap {
     std::uint32_t slot_ = detail::FlatIndex::kNone;
   };
   Accessor accessor() { return Accessor(*this); }
-
-  /// Applies `delta` to voxel i of brick b with OctoMap's early abort and clamping.
-  float update_voxel(Brick& b, int i, float delta) {
-    if (b.known.test(i)) {
-      const float v = b.get(i);
-      if ((delta >= 0 && v >= params_.clamp_max) || (delta <= 0 && v <= params_.clamp_min))
-        return v;
-      const float nv = clamp(v + delta);
-      track_change(b, i, nv);
-      write(b, i, nv);
-      return nv;
-    }
-    const float nv = clamp(0.0f + delta);
-    track_change(b, i, nv);
-    write(b, i, nv);
-    return nv;
-  }
-
-  /// update_voxel(b, i, delta) for every voxel i in `mask` (a whole scan's hits or misses of one
-  /// brick): the same float operations voxel by voxel, with the known mask and count updated a
-  /// word at a time.
-  void update_masked(Brick& b, const VoxelMask& mask, float delta) {
-    if (change_detection_) {  // per-voxel bookkeeping
-      mask.for_each([&](int i) { update_voxel(b, i, delta); });
-      return;
-    }
-    known_count_ += update_brick(b, mask, delta);
-  }
 
   // ---- iteration -----------------------------------------------------------------------------
 
@@ -338,10 +317,42 @@ class OccupancyMap {
     for (const auto& [packed, created] : changed_) f(Key::unpack(packed), created);
   }
 
-  // ---- brick access for whole-scan writers (ScanInserter) ------------------------------------
+ private:
+  template <class>
+  friend class detail::BrickWriter;
+  template <class>
+  friend class detail::BrickReader;
 
-  /// The brick with packed coordinate `coord`, created when missing.
-  Brick& brick_for_write(std::uint64_t coord) { return bricks_[brick_slot_for_write(coord)]; }
+  /// Applies `delta` to voxel i of brick b with OctoMap's early abort and clamping.
+  float update_voxel(Brick& b, int i, float delta) {
+    if (b.known.test(i)) {
+      const float v = b.get(i);
+      if ((delta >= 0 && v >= params_.clamp_max) || (delta <= 0 && v <= params_.clamp_min))
+        return v;
+      const float nv = clamp(v + delta);
+      track_change(b, i, nv);
+      write(b, i, nv);
+      return nv;
+    }
+    const float nv = clamp(0.0f + delta);
+    track_change(b, i, nv);
+    write(b, i, nv);
+    return nv;
+  }
+
+  /// update_voxel(b, i, delta) for every voxel i in `mask` (a whole scan's hits or misses of one
+  /// brick): the same float operations voxel by voxel, with the known mask and count updated a
+  /// word at a time.
+  void update_masked(Brick& b, const VoxelMask& mask, float delta) {
+    if (change_detection_) {  // per-voxel bookkeeping
+      mask.for_each([&](int i) { update_voxel(b, i, delta); });
+      return;
+    }
+    known_count_ += update_brick(b, mask, delta);
+  }
+
+  // ---- brick access for whole-scan writers: detail::BrickWriter / BrickReader -----------------
+  // (map/detail/brick_access.hpp). These keep the map's invariants only when used as documented.
 
   /// Slot of the brick with packed coordinate `coord`; a missing brick is created empty, without
   /// its value array (prepare_values or update_brick allocates it). Slots stay valid until
@@ -466,7 +477,6 @@ class OccupancyMap {
   }
   const detail::BigVector<Brick>& bricks() const { return bricks_; }
 
- private:
   float clamp(float v) const {
     if (v < params_.clamp_min) return params_.clamp_min;
     if (v > params_.clamp_max) return params_.clamp_max;

@@ -9,7 +9,7 @@
 // for sigma > 0 is s < mu + w*sigma;
 // its node receives logit(Prob) (summed over the scan's endpoints in the node, eq 15).
 //
-// Defined edge cases (documented in README, tested):
+// Defined edge cases (documented in docs/library.md, tested):
 //   - Prob is kept inside [kMinProb, P_u]: for large s eq 13 falls to or below 0 when
 //     Phi_std(w) <= 1 - P_w / P_u (small or negative w); the floor keeps logit finite (-6.9);
 //   - s NaN (the point has fewer than k neighbours or is not in the map cloud): the least reliable
@@ -38,7 +38,8 @@
 
 namespace knnocc {
 
-// Defaults: the best of the documented sweep (bench/bench_knn_sweep.cpp, README "k-NN model").
+// Defaults: the best of the documented sweep (bench/bench_knn_sweep.cpp; docs/results.md, "The
+// paper's experiment and the k-NN model's defaults").
 struct KnnModelParams {
   std::size_t k = kDefaultK;  ///< neighbours per map point (s_p = mean distance to them)
   double w = 0.0;             ///< reliability threshold: s < mu + w * sigma casts a free ray

@@ -22,6 +22,10 @@
 //                     or fuse it), each with probability repeat_prob
 //   outlier_depth_gain the outlier rate grows as (z / radius)^gain with depth z and the depth
 //                     error |factor - 1| as well (far matches are worse)
+//   random_patches    outlier_cluster and outlier_repeat become maxima: every patch draws its
+//                     size uniformly from 1..outlier_cluster and its lifetime from
+//                     0..outlier_repeat (patches then come (1 + outlier_cluster) / 2 times less
+//                     often than single wrong matches)
 // With all of them at their defaults the random sequence, and so every keyframe, is the same as
 // without them. seen_once_fraction() of the keyframes says how many distinct map points one
 // keyframe alone observes (6.6 % on ../shared/data/orbslam2_stereo_keyframes, `knnocc eval --ids`).
@@ -72,32 +76,38 @@ struct TreeSceneParams {
   std::size_t outlier_repeat = 0;   ///< following keyframes that may re-observe a patch
   double repeat_prob = 1.0;         ///< probability of each re-observation
   double outlier_depth_gain = 0.0;  ///< rate and depth error grow as (z / radius)^gain
+  bool random_patches = false;      ///< sizes and lifetimes drawn per patch up to the two above
 
   void validate() const {
     if (keyframes < 1 || keyframes > 100000)
-      detail::invalid_argument("keyframes must be in [1, 100000]");
-    if (!(radius > 1.5 && radius < 100)) detail::invalid_argument("radius must be in (1.5, 100) m");
-    if (!(detect > 0 && detect <= 1)) detail::invalid_argument("detect must be in (0, 1]");
-    if (!(outliers >= 0 && outliers < 1)) detail::invalid_argument("outliers must be in [0, 1)");
+      knnocc::detail::invalid_argument("keyframes must be in [1, 100000]");
+    if (!(radius > 1.5 && radius < 100))
+      knnocc::detail::invalid_argument("radius must be in (1.5, 100) m");
+    if (!(detect > 0 && detect <= 1)) knnocc::detail::invalid_argument("detect must be in (0, 1]");
+    if (!(outliers >= 0 && outliers < 1))
+      knnocc::detail::invalid_argument("outliers must be in [0, 1)");
     if (!(disparity_noise >= 0 && lateral_noise >= 0 && disparity_noise < 100 &&
           lateral_noise < 10))
-      detail::invalid_argument("noise must be >= 0 (disparity < 100 px, lateral < 10 m)");
+      knnocc::detail::invalid_argument("noise must be >= 0 (disparity < 100 px, lateral < 10 m)");
     auto in = [](double v, double lo, double hi) { return v >= lo && v <= hi; };  // NaN fails
-    if (!in(height, -100, 100)) detail::invalid_argument("height must be in [-100, 100] m");
+    if (!in(height, -100, 100)) knnocc::detail::invalid_argument("height must be in [-100, 100] m");
     if (!in(focal, 1, 1e5) || !in(baseline, 1e-3, 10) || width < 16 || height_px < 16 ||
         width > 100000 || height_px > 100000)
-      detail::invalid_argument(
+      knnocc::detail::invalid_argument(
           "camera: focal in [1, 1e5] px, baseline in [1 mm, 10 m], image sides in [16, 1e5] px");
     if (!in(foliage_density, 0, 1e4) || !in(pot_density, 0, 1e4) || !in(ground_density, 0, 1e4))
-      detail::invalid_argument("densities must be in [0, 1e4] sites per m^2");
-    if (!in(ground_radius, 0, 100)) detail::invalid_argument("ground_radius must be in [0, 100] m");
+      knnocc::detail::invalid_argument("densities must be in [0, 1e4] sites per m^2");
+    if (!in(ground_radius, 0, 100))
+      knnocc::detail::invalid_argument("ground_radius must be in [0, 100] m");
     if (outlier_cluster < 1 || outlier_cluster > 100)
-      detail::invalid_argument("outlier_cluster must be in [1, 100]");
-    if (!in(cluster_radius, 0, 1)) detail::invalid_argument("cluster_radius must be in [0, 1] m");
-    if (outlier_repeat > 1000) detail::invalid_argument("outlier_repeat must be in [0, 1000]");
-    if (!in(repeat_prob, 0, 1)) detail::invalid_argument("repeat_prob must be in [0, 1]");
+      knnocc::detail::invalid_argument("outlier_cluster must be in [1, 100]");
+    if (!in(cluster_radius, 0, 1))
+      knnocc::detail::invalid_argument("cluster_radius must be in [0, 1] m");
+    if (outlier_repeat > 1000)
+      knnocc::detail::invalid_argument("outlier_repeat must be in [0, 1000]");
+    if (!in(repeat_prob, 0, 1)) knnocc::detail::invalid_argument("repeat_prob must be in [0, 1]");
     if (!in(outlier_depth_gain, 0, 10))
-      detail::invalid_argument("outlier_depth_gain must be in [0, 10]");
+      knnocc::detail::invalid_argument("outlier_depth_gain must be in [0, 10]");
   }
 };
 
@@ -105,6 +115,7 @@ struct SimKeyframe {
   io::Pose pose;             ///< camera to world (stamp = keyframe index)
   io::Cloud cloud;           ///< camera frame, one map-point id per point
   std::size_t outliers = 0;  ///< wrong matches among the points
+  std::size_t patches = 0;   ///< wrong patches this keyframe created (not re-observed ones)
 };
 
 class TreeScene {
@@ -151,6 +162,7 @@ class TreeScene {
     return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
   }
   static std::size_t rounded(double mean) { return static_cast<std::size_t>(std::llround(mean)); }
+  static std::size_t rounded_down(double v) { return static_cast<std::size_t>(std::floor(v)); }
 
   void make_sites() {
     const eval::Ellipsoid& e = ref_.ellipsoids[0];
@@ -280,7 +292,9 @@ class TreeScene {
       const double depth_scale =
           p_.outlier_depth_gain > 0 ? std::pow(pc.z() / p_.radius, p_.outlier_depth_gain) : 1.0;
       // a wrong stereo match (a patch of outlier_cluster points) instead of this site
-      if (uniform() < p_.outliers * depth_scale / static_cast<double>(p_.outlier_cluster)) {
+      const double mean_size = p_.random_patches ? (1.0 + double(p_.outlier_cluster)) / 2
+                                                 : static_cast<double>(p_.outlier_cluster);
+      if (uniform() < p_.outliers * depth_scale / mean_size) {
         const double e = 1.1 * uniform();  // factor 0.5 + e, its error scaled by depth_scale
         const double factor =
             depth_scale == 1.0 ? 0.5 + e : std::max(0.2, 1.0 + (e - 0.5) * depth_scale);
@@ -299,7 +313,13 @@ class TreeScene {
   void add_wrong_patch(SimKeyframe& kf, const Eigen::Vector3d& pc, double factor,
                        const Eigen::Matrix3d& R, const Eigen::Vector3d& o) {
     Patch patch;
-    for (std::size_t m = 0; m < p_.outlier_cluster; ++m) {
+    std::size_t size = p_.outlier_cluster, lifetime = p_.outlier_repeat;
+    if (p_.random_patches) {
+      size = 1 + std::min(p_.outlier_cluster - 1, rounded_down(uniform() * double(size)));
+      lifetime = std::min(lifetime, rounded_down(uniform() * double(lifetime + 1)));
+    }
+    ++kf.patches;
+    for (std::size_t m = 0; m < size; ++m) {
       Eigen::Vector3d q = pc;
       if (m > 0) q += Eigen::Vector3d(normal(), normal(), 0.0) * (p_.cluster_radius / 2);
       const Eigen::Vector3d wrong = q * factor;
@@ -312,8 +332,8 @@ class TreeScene {
         patch.ids.push_back(id);
       }
     }
-    if (p_.outlier_repeat > 0) {
-      patch.left = p_.outlier_repeat;
+    if (lifetime > 0) {
+      patch.left = lifetime;
       patches_.push_back(std::move(patch));
     }
   }

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "../../map/brick.hpp"
+#include "../../map/detail/brick_access.hpp"
 #include "../../map/occupancy_map.hpp"
 #include "hashed_marks.hpp"
 #include "hit_codes.hpp"
@@ -165,6 +166,7 @@ template <class Key>
 UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const ScanValues& values,
                                 bool codes = false) {
   using layout = BrickLayout<Key>;
+  BrickWriter<Key> writer(map);
   ScanBitmap& hit = s.hit;
   ScanBitmap& miss = s.miss;  // the box's shape (the hit bitmap has it too unless `codes`)
   const std::int64_t nbx = miss.bricks(0), nby = miss.bricks(1), nbz = miss.bricks(2);
@@ -216,7 +218,7 @@ UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const 
         for (std::int64_t bx = 0; bx < nbx; ++bx)
           touched += hit.brick_in(any_hit, bx) || miss.brick_in(any_miss, bx);
       }
-    map.reserve_bricks(touched);
+    writer.reserve_bricks(touched);
   }
   const bool hits_here = !values.rated;  // rated hits carry their own sums
   const bool records = map.change_detection_enabled();
@@ -229,18 +231,18 @@ UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const 
         VoxelMask& h = row_hit[bx];
         VoxelMask& m = row_miss[bx];
         if (!h.any() && !m.any()) continue;
-        const std::uint32_t slot = map.brick_slot(layout::pack_brick(
+        const std::uint32_t slot = writer.brick_slot(layout::pack_brick(
             (lo[0] >> kBrickBits) + bx, (lo[1] >> kBrickBits) + by, (lo[2] >> kBrickBits) + bz));
         for (std::size_t i = 0; i < m.w.size(); ++i) m.w[i] &= ~h.w[i];  // hit wins
-        auto& brick = map.brick_at(slot);
+        auto& brick = writer.brick_at(slot);
         const int masks = int(hits_here && h.any()) + int(m.any());
-        if (masks > 1 || brick.known.any() || records) map.prepare_values(brick);
+        if (masks > 1 || brick.known.any() || records) writer.prepare_values(brick);
         if (records) {
-          if (hits_here) map.update_masked(brick, h, values.hit);
-          map.update_masked(brick, m, values.miss);
+          if (hits_here) writer.update_masked(brick, h, values.hit);
+          writer.update_masked(brick, m, values.miss);
         } else {
-          if (hits_here) c.added += map.update_brick(brick, h, values.hit);
-          c.added += map.update_brick(brick, m, values.miss);
+          if (hits_here) c.added += writer.update_brick(brick, h, values.hit);
+          c.added += writer.update_brick(brick, m, values.miss);
         }
         if (hits_here) c.occupied += static_cast<std::size_t>(h.count());
         c.free += static_cast<std::size_t>(m.count());
@@ -250,7 +252,7 @@ UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const 
     }
   if (!codes) hit.mark_clean();
   miss.mark_clean();
-  if (!records) map.add_known(c.added);
+  if (!records) writer.add_known(c.added);
   return c;
 }
 
@@ -308,29 +310,30 @@ void order_hashed(ThreadScratches& scratch, unsigned threads, std::vector<std::u
 template <class Key, class Updates>
 UpdateCounts apply_updates(OccupancyMap<Key>& map, const Updates& bricks, const ScanValues& values,
                            Team& team, ThreadScratches& scratch) {
-  if (map.num_bricks() == 0) map.reserve_bricks(bricks.size());  // a fresh map: all are new
-  const bool hits_here = !values.rated;                          // rated hits carry their own sums
+  BrickWriter<Key> writer(map);
+  if (map.num_bricks() == 0) writer.reserve_bricks(bricks.size());  // a fresh map: all are new
+  const bool hits_here = !values.rated;  // rated hits carry their own sums
   const bool records = map.change_detection_enabled();
   for (std::size_t g = 0; g < bricks.groups(); ++g)
     bricks.each(
         g, [&](std::uint64_t coord, std::uint32_t& slot, const VoxelMask& hit, VoxelMask& miss) {
-          slot = map.brick_slot(coord);
+          slot = writer.brick_slot(coord);
           for (std::size_t i = 0; i < miss.w.size(); ++i) miss.w[i] &= ~hit.w[i];  // hit wins
-          auto& brick = map.brick_at(slot);
+          auto& brick = writer.brick_at(slot);
           const int masks = int(hits_here && hit.any()) + int(miss.any());
-          if (masks > 1 || brick.known.any() || records) map.prepare_values(brick);
+          if (masks > 1 || brick.known.any() || records) writer.prepare_values(brick);
         });
   UpdateCounts total;
   if (records) {  // records per voxel, in one thread
     for (std::size_t g = 0; g < bricks.groups(); ++g)
       bricks.each(
           g, [&](std::uint64_t, std::uint32_t slot, const VoxelMask& hit, const VoxelMask& miss) {
-            auto& brick = map.brick_at(slot);
+            auto& brick = writer.brick_at(slot);
             if (hits_here) {
-              map.update_masked(brick, hit, values.hit);
+              writer.update_masked(brick, hit, values.hit);
               total.occupied += static_cast<std::size_t>(hit.count());
             }
-            map.update_masked(brick, miss, values.miss);
+            writer.update_masked(brick, miss, values.miss);
             total.free += static_cast<std::size_t>(miss.count());
           });
     return total;
@@ -342,12 +345,12 @@ UpdateCounts apply_updates(OccupancyMap<Key>& map, const Updates& bricks, const 
     for (std::size_t g; queue.take(g);)
       bricks.each(
           g, [&](std::uint64_t, std::uint32_t slot, const VoxelMask& hit, const VoxelMask& miss) {
-            auto& brick = map.brick_at(slot);
+            auto& brick = writer.brick_at(slot);
             if (hits_here) {
-              c.added += map.update_brick(brick, hit, values.hit);
+              c.added += writer.update_brick(brick, hit, values.hit);
               c.occupied += static_cast<std::size_t>(hit.count());
             }
-            c.added += map.update_brick(brick, miss, values.miss);
+            c.added += writer.update_brick(brick, miss, values.miss);
             c.free += static_cast<std::size_t>(miss.count());
           });
   };
@@ -356,7 +359,7 @@ UpdateCounts apply_updates(OccupancyMap<Key>& map, const Updates& bricks, const 
     const UpdateCounts& c = scratch[t]->counts;
     total.occupied += c.occupied;
     total.free += c.free;
-    map.add_known(c.added);
+    writer.add_known(c.added);
   }
   return total;
 }

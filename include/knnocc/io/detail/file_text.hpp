@@ -44,7 +44,13 @@ class FileBuffer {
   std::size_t size_ = 0;
 };
 
-inline FileBuffer read_file(const std::string& path) {
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
+
+// A regular file opened for reading, and its size; io::Error naming it otherwise.
+inline FilePtr open_regular_file(const std::string& path, std::uintmax_t& size) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
@@ -53,11 +59,17 @@ inline FileBuffer read_file(const std::string& path) {
   }
   // Sizing a directory or FIFO by seeking gives nonsense, so refuse it up front.
   if (!fs::is_regular_file(st)) throw Error(path, "cannot open: not a regular file");
-  const std::uintmax_t size = fs::file_size(path, ec);
+  size = fs::file_size(path, ec);
   if (ec) throw Error(path, "cannot open: " + ec.message());
-
-  std::FILE* f = std::fopen(path.c_str(), "rb");
+  FilePtr f(std::fopen(path.c_str(), "rb"));
   if (!f) throw Error(path, "cannot open: " + errno_text(errno));
+  return f;
+}
+
+inline FileBuffer read_file(const std::string& path) {
+  std::uintmax_t size = 0;
+  const FilePtr file = open_regular_file(path, size);
+  std::FILE* f = file.get();
   FileBuffer buf;
   buf.size_ = static_cast<std::size_t>(size);
   // Not value-initialised: that would cost a full extra pass.
@@ -65,12 +77,10 @@ inline FileBuffer read_file(const std::string& path) {
       static_cast<char*>(knnocc::detail::big_alloc(buf.size_ + 1)),
       knnocc::detail::BigFree{buf.size_ + 1});
   if (!buf.data_) {
-    std::fclose(f);
     throw Error(path, "cannot read: out of memory for " + std::to_string(buf.size_) + " bytes");
   }
   const std::size_t got = buf.size_ ? std::fread(buf.data_.get(), 1, buf.size_, f) : 0;
   const int read_err = std::ferror(f) ? errno : 0;
-  std::fclose(f);
   if (got != buf.size_) {
     throw Error(path, "read failed after " + std::to_string(got) + " of " +
                           std::to_string(buf.size_) + " bytes" +
@@ -176,6 +186,51 @@ void for_each_line(const char* p, const char* end, Fn&& fn) {
   }
 }
 
+/// The longest line for_each_file_line() accepts (far above any text line of a real file).
+inline constexpr std::size_t kMaxLineBytes = std::size_t{1} << 20;
+
+// for_each_line() over a file read 1 MiB at a time: memory stays bounded whatever the file's size,
+// and fn(line, begin, end) may stop the reading by throwing. A line longer than kMaxLineBytes is an
+// io::Error naming it. Each line is followed by a '\0' in the buffer (for strtod fallbacks).
+template <class Fn>
+void for_each_file_line(const std::string& path, Fn&& fn) {
+  std::uintmax_t size = 0;
+  const FilePtr f = open_regular_file(path, size);
+  std::string buf;  // unfinished line, then what was read after it
+  std::size_t line = 0;
+  bool first = true, eof = false;
+  while (!eof) {
+    const std::size_t kept = buf.size();
+    buf.resize(kept + (std::size_t{1} << 20));
+    const std::size_t got = std::fread(&buf[kept], 1, buf.size() - kept, f.get());
+    buf.resize(kept + got);
+    if (got == 0) {
+      if (std::ferror(f.get())) throw Error(path, "read failed: " + errno_text(errno));
+      eof = true;
+    }
+    if (first && buf.size() >= 3) {  // a UTF-8 byte-order mark, as for_each_line()
+      if (std::memcmp(buf.data(), "\xEF\xBB\xBF", 3) == 0) buf.erase(0, 3);
+      first = false;
+    }
+    std::size_t p = 0;
+    while (true) {
+      const std::size_t nl = buf.find('\n', p);
+      if (nl == std::string::npos && !(eof && p < buf.size())) break;
+      const std::size_t le = nl == std::string::npos ? buf.size() : nl;
+      std::size_t content_end = le;
+      if (content_end != p && buf[content_end - 1] == '\r') --content_end;
+      ++line;
+      if (le < buf.size()) buf[le] = '\0';  // the newline, never looked at again
+      fn(line, buf.data() + p, buf.data() + content_end);
+      p = nl == std::string::npos ? buf.size() : nl + 1;
+    }
+    buf.erase(0, p);
+    if (buf.size() > kMaxLineBytes)
+      throw Error(path, "line " + std::to_string(line + 1) + " is longer than " +
+                            std::to_string(kMaxLineBytes >> 20) + " MiB");
+  }
+}
+
 // Reads up to n numbers from a line into out[]; returns how many were found. Parsing stops at the
 // line end, at a '#' (if hash_comments) or after n numbers (the rest of the line is ignored).
 template <class T>
@@ -250,6 +305,17 @@ inline char* format_float_roundtrip(char* buf, char* buf_end, float v) {
   const int n =
       std::snprintf(buf, static_cast<std::size_t>(buf_end - buf), "%.9g", static_cast<double>(v));
   return buf + (n > 0 ? std::min<std::ptrdiff_t>(n, buf_end - buf - 1) : 0);
+}
+
+// The shortest "%g" text that reads back to the same double (for messages that compare values:
+// 0.1 and 0.1000001 must not both print as 0.100000).
+inline std::string round_trip_text(double v) {
+  char text[32];
+  for (int digits = 1; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, v);
+    if (std::strtod(text, nullptr) == v) break;
+  }
+  return text;
 }
 
 }  // namespace detail

@@ -10,9 +10,11 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <string>
 
+#include "../../core/grid.hpp"
 #include "../error.hpp"
 #include "bytes.hpp"
 #include "file_text.hpp"
@@ -31,7 +33,11 @@ struct OctreeHeader {
   std::uint64_t size = 0;       // node count claimed by the header
   double resolution = 0.0;      // voxel edge
   std::size_t data_offset = 0;  // first byte of the node stream
+  std::string note;             // the text after "# knnocc " of such a comment line, or empty
 };
+
+/// The comment line a knnocc note is written as (OctoMap's readers skip comment lines).
+inline constexpr const char* kNotePrefix = "# knnocc ";
 
 inline OctreeHeader parse_octree_header(const std::string& path, const char* data,
                                         std::size_t size) {
@@ -65,6 +71,9 @@ inline OctreeHeader parse_octree_header(const std::string& path, const char* dat
     check_header_length(path, "OctoMap", static_cast<std::size_t>(e - data));
     ++line;
     while (b != e && is_blank(*b)) ++b;
+    const std::size_t prefix = std::strlen(kNotePrefix);
+    if (static_cast<std::size_t>(e - b) > prefix && std::memcmp(b, kNotePrefix, prefix) == 0)
+      h.note.assign(b + prefix, e);
     if (b == e || *b == '#') continue;
     const char* k = b;
     while (b != e && !is_blank(*b)) ++b;
@@ -88,6 +97,18 @@ inline OctreeHeader parse_octree_header(const std::string& path, const char* dat
       if (!parse_real_token(b, ve, h.resolution) || !(h.resolution > 0.0) ||
           !std::isfinite(h.resolution) || !std::isfinite(1.0 / h.resolution)) {
         throw Error(path, at + "invalid resolution " + quote_token(b, ve));
+      }
+      if (h.resolution < Grid<OcKey>::min_resolution ||
+          h.resolution > Grid<OcKey>::max_resolution) {
+        const bool small = h.resolution < Grid<OcKey>::min_resolution;
+        char text[160];
+        std::snprintf(text, sizeof text,
+                      small ? "resolution %g is below %g m, the finest a map takes"
+                            : "resolution %g is above %g m: the key range (+-32768 voxels) "
+                              "would not fit a float",
+                      h.resolution,
+                      small ? Grid<OcKey>::min_resolution : Grid<OcKey>::max_resolution);
+        throw Error(path, at + text);
       }
       have_res = true;
     } else {

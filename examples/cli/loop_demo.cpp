@@ -1,4 +1,3 @@
-#pragma once
 // knnocc demo --scene loop: mapping under SLAM corrections. The simulated tree scene is seen by a
 // camera whose tracking drifts (sim/drift.hpp); local bundle adjustment re-poses recent keyframes
 // every 10 keyframes and the loop closure after the last keyframe re-poses them all. For both
@@ -27,24 +26,57 @@
 #include <knnocc/sim/tree_scene.hpp>
 
 #include "args.hpp"
+#include "commands.hpp"
 #include "live_corrections.hpp"
 #include "map_picture.hpp"
 
 namespace knnocc::cli {
 
-inline const char* loop_demo_help() {
-  return R"(usage: knnocc demo --scene loop [--seed S] [--drift DEG] [--res R] [--crop M] [--out DIR]
+namespace {
 
-Mapping under SLAM corrections on the simulated tree scene (`knnocc sim --drift`): the camera's
-heading estimate drifts DEG degrees per keyframe (default 0.1) plus jitter; local bundle
-adjustment re-poses the last 5 keyframes every 10 keyframes, and the loop closure after the last
-keyframe re-poses all of them to their true poses. For the OctoMap and the k-NN model it builds
+CommandSpec make_loop_demo_spec() {
+  CommandSpec s;
+  s.name = "demo --scene loop";
+  s.summary = "mapping under SLAM corrections: drifted, live-corrected and true-pose maps";
+  s.usage = "knnocc demo --scene loop [--seed S] [--drift DEG] [--res R] [--crop M] [--out DIR]";
+  s.text =
+      R"(Mapping under SLAM corrections on the simulated tree scene (`knnocc sim --drift`): the camera's
+heading estimate drifts DEG degrees per keyframe plus jitter; local bundle adjustment re-poses the
+last 5 keyframes every 10 keyframes, and the loop closure after the last keyframe re-poses all of
+them to their true poses. For the OctoMap and the k-NN model it builds
   drifted    from the drifted estimates, never corrected (doubled surfaces)
   live       LiveMapper, each correction applied when it arrives
   true       from the true poses
 checks that live and true are identical (exit status 1 if not), and prints Table 1 for the three
-and the time each correction took. --out DIR also writes <model>_<map>.png and .bt per map.
+and the time each correction took.
 )";
+  s.groups.push_back(
+      {"options",
+       {Option::text("--scene", "NAME", "loop for this demo").one_of({"tree", "room", "loop"}),
+        Option::integer("--seed", "S", "random seed of the scene and the drift")
+            .fallback("1")
+            .at_least(0),
+        Option::number("--drift", "DEG", "heading drift per keyframe in degrees")
+            .fallback("0.1")
+            .at_least(0)
+            .at_most(10),
+        Option::number("--res", "R", "voxel edge in metres")
+            .fallback("0.1")
+            .at_least(0.02)
+            .at_most(1),
+        Option::number("--crop", "M", "keep the points within M of their camera")
+            .fallback("4")
+            .above(0),
+        Option::text("--out", "DIR", "also write <model>_<map>.png and .bt per map into DIR")},
+       ""});
+  return s;
+}
+
+}  // namespace
+
+const CommandSpec& loop_demo_spec() {
+  static const CommandSpec spec = make_loop_demo_spec();
+  return spec;
 }
 
 namespace loop_demo {
@@ -132,20 +164,11 @@ bool run_model(const char* name, const Model& model, const std::vector<sim::SimK
 
 }  // namespace loop_demo
 
-inline int run_loop_demo(const std::vector<std::string>& argv) {
-  const Args args(argv, {"--scene", "--seed", "--drift", "--res", "--crop", "--out"}, {});
-  if (args.help()) {
-    std::fputs(loop_demo_help(), stdout);
-    return 0;
-  }
-  const long seed = args.integer("--seed", 1);
-  if (seed < 0) throw UsageError("--seed must be >= 0");
-  const double drift = args.number("--drift", 0.1);
-  if (!(drift >= 0.0 && drift <= 10.0)) throw UsageError("--drift must be in [0, 10] degrees");
-  const double res = args.number("--res", 0.1);
-  if (!(res >= 0.02 && res <= 1.0)) throw UsageError("--res must be in [0.02, 1] for the demo");
-  const double crop = args.number("--crop", 4.0);
-  if (!(crop > 0)) throw UsageError("--crop must be > 0");
+int run_loop_demo(const Args& args) {
+  const long seed = args.integer("--seed");
+  const double drift = args.number("--drift");
+  const double res = args.number("--res");
+  const double crop = args.number("--crop");
   const std::string out = args.str("--out");
   if (!out.empty()) std::filesystem::create_directories(out);
 

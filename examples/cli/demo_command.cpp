@@ -1,4 +1,3 @@
-#pragma once
 // knnocc demo: the embedded default job, the paper's experiment (section 4) on the simulated tree
 // scene: both inverse sensor models map the same keyframes, and the maps are compared with the
 // reference shapes (Table 1), over several seeds. Needs no data files.
@@ -26,22 +25,18 @@
 #include <knnocc/sim/tree_scene.hpp>
 
 #include "args.hpp"
-#include "loop_demo.hpp"
-#include "map_command.hpp"
+#include "commands.hpp"
+#include "common_options.hpp"
+#include "map_outputs.hpp"
 #include "map_picture.hpp"
-#include "room_demo.hpp"
 #include "view_page.hpp"
 
 namespace knnocc::cli {
 
-inline const char* demo_help() {
-  return R"(usage: knnocc demo [--regime NAME|all] [--seeds N] [--first-seed S] [--res R] [--crop M]
-                   [--out DIR] [k-NN model flags of `knnocc map`: --k --w --p-upper --p-w
-                   --p-free --s-limit]
-       knnocc demo --scene room      (the LiDAR room demo, see knnocc demo --scene room --help)
-       knnocc demo --scene loop      (mapping under SLAM corrections, see --scene loop --help)
+namespace {
 
-The paper's experiment (section 4) on the simulated tree scene (`knnocc sim`): for each seed the
+const char* kDemoText =
+    R"(The paper's experiment (section 4) on the simulated tree scene (`knnocc sim`): for each seed the
 same keyframes (points within --crop 4 m of the camera) are mapped at --res 0.1 m with the OctoMap
 model, the k-NN model and the robust model, and each map is compared with the reference shapes
 (`knnocc eval`), for each outlier regime (`knnocc sim --regime`): isolated (paper-like, wrong
@@ -49,18 +44,65 @@ matches seen once), clustered (patches of 6), repeated (clustered, re-observed b
 keyframes), realistic (repeated with probability 0.75, worse with depth). Prints per regime one
 row per seed and model, Table 1 as mean and standard deviation over the seeds, and each model's
 figures relative to the OctoMap model's against the goals (irrelevant <= 10 %, shell >= 97 %).
-  --regime NAME    one regime, or all (default)
-  --seeds N        how many seeds (default 5), starting at --first-seed (default 1)
-  --out DIR        also write, for the first seed: the sequence folder (DIR/scene), the reference
-                   (DIR/scene/reference.txt) and both maps (<model> = octomap, knn, robust; first regime) as OctoMap
-                   binary trees for octovis (DIR/<model>.bt), voxel lists (DIR/<model>.voxels),
-                   occupied voxels as PLY cubes coloured by height (DIR/<model>_occupied.ply)
-                   and top/side pictures (DIR/<model>.png); DIR/demo.png, one picture of
-                   OctoMap model | k-NN model | robust model | reference (same extent and
-                   colours), and DIR/demo.html, the four in 3D (knnocc view).
-                   DIR must be new, empty or an earlier demo's output (built aside as
-                   DIR.tmp-XXXXXX and renamed when complete)
+Other scenes: `knnocc demo --scene room` (a LiDAR room), `knnocc demo --scene loop` (mapping
+under SLAM corrections); each has its own --help.
 )";
+
+CommandSpec make_demo_spec() {
+  CommandSpec s;
+  s.name = "demo";
+  s.summary =
+      "the embedded default job: the paper's experiment on a simulated tree scene, OctoMap, k-NN "
+      "and robust models under four outlier regimes (Table 1); --scene room / loop: other demos";
+  s.usage =
+      "knnocc demo [--regime NAME|all] [--seeds N] [--first-seed S] [--res R] [--crop M]\n"
+      "                   [--out DIR] [k-NN model flags]\n"
+      "       knnocc demo --scene room|loop [options]   (see knnocc demo --scene room --help)";
+  s.text = kDemoText;
+  s.groups.push_back(
+      {"options",
+       {Option::text("--scene", "NAME", "which demo")
+            .fallback("tree")
+            .one_of({"tree", "room", "loop"}),
+        Option::text("--regime", "NAME", "one outlier regime, or all")
+            .fallback("all")
+            .one_of({"isolated", "clustered", "repeated", "realistic", "all"}),
+        Option::integer("--seeds", "N", "how many seeds, from --first-seed on")
+            .fallback("5")
+            .at_least(1)
+            .at_most(1000),
+        Option::integer("--first-seed", "S", "the first seed")
+            .fallback("1")
+            .at_least(0)
+            .at_most(1e9),
+        Option::number("--res", "R", "voxel edge in metres")
+            .fallback("0.1")
+            .at_least(0.02)
+            .at_most(1),
+        Option::number("--crop", "M", "keep the points within M of their camera")
+            .fallback("4")
+            .above(0),
+        Option::text("--out", "DIR",
+                     "also write, for the first seed: the sequence folder (DIR/scene), the "
+                     "reference (DIR/scene/reference.txt) and the three maps (<model> = octomap, "
+                     "knn, robust; first regime) as OctoMap binary trees (DIR/<model>.bt), voxel "
+                     "lists (DIR/<model>.voxels), occupied voxels as PLY cubes coloured by height "
+                     "(DIR/<model>_occupied.ply) and top/side pictures (DIR/<model>.png); "
+                     "DIR/demo.png, one picture of OctoMap model | k-NN model | robust model | "
+                     "reference (same extent and colours), and DIR/demo.html, the four in 3D "
+                     "(knnocc view). DIR must be new, empty or an earlier demo's output (built "
+                     "aside as DIR.tmp-XXXXXX and renamed when complete)"),
+        memory_limit_option()},
+       ""});
+  s.groups.push_back(knn_model_group("k-NN model (also the robust model's s part)", ""));
+  return s;
+}
+
+}  // namespace
+
+const CommandSpec& demo_spec() {
+  static const CommandSpec spec = make_demo_spec();
+  return spec;
 }
 
 namespace demo {
@@ -153,66 +195,41 @@ struct RegimeResult {
   std::vector<Row> octo, knn, robust;
 };
 
-// One regime over the seeds: per-seed rows, then Table 1 and the goals.
-inline void run_regime(const sim::Regime& regime, long first, long seeds, double res, double crop,
-                       const KnnModel& knn, const RobustModel& robust, const std::string& out) {
-  std::printf("regime %s\n", regime.name.c_str());
-  std::printf("%-5s %-8s %8s %8s %6s %8s %8s %10s %11s %8s\n", "seed", "model", "occupied", "free",
-              "shell", "in_shell", "covered", "irrelevant", "free_inside", "ms/kf");
-  RegimeResult rr;
-  std::size_t shell = 0, points = 0, outliers = 0;
-  double seen_once = 0;
-  for (long s = first; s < first + seeds; ++s) {
-    sim::TreeSceneParams sp = regime.params;
-    sp.seed = static_cast<std::uint64_t>(s);
-    sim::TreeScene scene(sp);
-    const auto kfs = scene.keyframes();
-    for (const auto& kf : kfs) {
-      points += kf.cloud.points.size();
-      outliers += kf.outliers;
-    }
-    seen_once += sim::seen_once_fraction(kfs, crop) / double(seeds);
-    std::string dir;
-    if (!out.empty() && s == first) {
-      dir = out;
-      const std::string seq = (std::filesystem::path(out) / "scene").string();
-      std::vector<io::Pose> poses;
-      std::vector<const io::Cloud*> clouds;
-      for (const auto& kf : kfs) {
-        poses.push_back(kf.pose);
-        clouds.push_back(&kf.cloud);
-      }
-      io::write_sequence(seq, poses, clouds);
-      eval::write_reference((std::filesystem::path(seq) / "reference.txt").string(),
-                            scene.reference());
-    }
-    OccupancyMap<OcKey> octo_map(res), knn_map(res), robust_map(res);
-    rr.octo.push_back(
-        run_model(kfs, scene.reference(), res, crop, OctoMapModel{}, dir, "octomap", &octo_map));
-    rr.knn.push_back(run_model(kfs, scene.reference(), res, crop, knn, dir, "knn", &knn_map));
-    rr.robust.push_back(
-        run_model(kfs, scene.reference(), res, crop, robust, dir, "robust", &robust_map));
-    if (!dir.empty()) {
-      const OccupancyMap<OcKey> ref_map = reference_map(scene.reference(), res);
-      const std::vector<std::pair<std::string, const OccupancyMap<OcKey>*>> maps = {
-          {"OctoMap model", &octo_map},
-          {"k-NN model", &knn_map},
-          {"robust model", &robust_map},
-          {"reference shapes", &ref_map}};
-      write_comparison_png((std::filesystem::path(dir) / "demo.png").string(), maps, UpAxis{});
-      std::vector<ViewMap> views;
-      for (const auto& [title, m] : maps) views.push_back({title, m});
-      write_view_page((std::filesystem::path(dir) / "demo.html").string(), views, UpAxis{},
-                      ViewOptions{});
-    }
-    for (const auto& [name, r] : {std::pair<const char*, const Row&>{"octomap", rr.octo.back()},
-                                  std::pair<const char*, const Row&>{"knn", rr.knn.back()},
-                                  std::pair<const char*, const Row&>{"robust", rr.robust.back()}})
-      std::printf("%-5ld %-8s %8zu %8zu %6zu %8zu %8zu %10zu %11zu %8.3f\n", s, name, r.m.occupied,
-                  r.m.free, r.m.shell, r.m.in_shell, r.m.covered, r.m.irrelevant, r.m.free_inside,
-                  r.median_ms);
-    shell += rr.octo.back().m.shell;
+// The first seed's scene as a sequence folder with its reference, for `knnocc map` and `eval`.
+inline void write_scene(const std::string& out, const std::vector<sim::SimKeyframe>& kfs,
+                        const eval::Reference& reference) {
+  const std::string seq = (std::filesystem::path(out) / "scene").string();
+  std::vector<io::Pose> poses;
+  std::vector<const io::Cloud*> clouds;
+  for (const auto& kf : kfs) {
+    poses.push_back(kf.pose);
+    clouds.push_back(&kf.cloud);
   }
+  io::write_sequence(seq, poses, clouds);
+  eval::write_reference((std::filesystem::path(seq) / "reference.txt").string(), reference);
+}
+
+// demo.png and demo.html: the three maps and the reference side by side.
+inline void write_comparison(const std::string& dir, const OccupancyMap<OcKey>& octo_map,
+                             const OccupancyMap<OcKey>& knn_map,
+                             const OccupancyMap<OcKey>& robust_map,
+                             const eval::Reference& reference, double res) {
+  const OccupancyMap<OcKey> ref_map = reference_map(reference, res);
+  const std::vector<std::pair<std::string, const OccupancyMap<OcKey>*>> maps = {
+      {"OctoMap model", &octo_map},
+      {"k-NN model", &knn_map},
+      {"robust model", &robust_map},
+      {"reference shapes", &ref_map}};
+  write_comparison_png((std::filesystem::path(dir) / "demo.png").string(), maps, UpAxis{});
+  std::vector<ViewMap> views;
+  for (const auto& [title, m] : maps) views.push_back({title, m});
+  write_view_page((std::filesystem::path(dir) / "demo.html").string(), views, UpAxis{},
+                  ViewOptions{});
+}
+
+// Table 1: mean and standard deviation over the seeds, per model.
+inline void print_table(const sim::Regime& regime, long seeds, std::size_t shell,
+                        const RegimeResult& rr) {
   auto table_row = [&](const char* name, const std::vector<Row>& rows) {
     const auto a = spread(rows, [](const Row& r) { return double(r.m.in_shell); });
     const auto b = spread(rows, [](const Row& r) { return double(r.m.covered); });
@@ -229,6 +246,10 @@ inline void run_regime(const sim::Regime& regime, long first, long seeds, double
   table_row("OctoMap model", rr.octo);
   table_row("k-NN model", rr.knn);
   table_row("robust model", rr.robust);
+}
+
+// The k-NN and robust models' figures relative to the OctoMap model's, against the goals.
+inline void print_goals(const RegimeResult& rr) {
   auto total = [](const std::vector<Row>& rows, auto f) {
     double t = 0;
     for (const auto& r : rows) t += f(r);
@@ -257,6 +278,45 @@ inline void run_regime(const sim::Regime& regime, long first, long seeds, double
         : shell_pct >= 97.0 ? "met"
                             : "NOT met");
   }
+}
+
+// One regime over the seeds: per-seed rows, then Table 1 and the goals.
+inline void run_regime(const sim::Regime& regime, long first, long seeds, double res, double crop,
+                       const KnnModel& knn, const RobustModel& robust, const std::string& out) {
+  std::printf("regime %s\n", regime.name.c_str());
+  std::printf("%-5s %-8s %8s %8s %6s %8s %8s %10s %11s %8s\n", "seed", "model", "occupied", "free",
+              "shell", "in_shell", "covered", "irrelevant", "free_inside", "ms/kf");
+  RegimeResult rr;
+  std::size_t shell = 0, points = 0, outliers = 0;
+  double seen_once = 0;
+  for (long s = first; s < first + seeds; ++s) {
+    sim::TreeSceneParams sp = regime.params;
+    sp.seed = static_cast<std::uint64_t>(s);
+    sim::TreeScene scene(sp);
+    const auto kfs = scene.keyframes();
+    for (const auto& kf : kfs) {
+      points += kf.cloud.points.size();
+      outliers += kf.outliers;
+    }
+    seen_once += sim::seen_once_fraction(kfs, crop) / double(seeds);
+    const std::string dir = !out.empty() && s == first ? out : "";
+    if (!dir.empty()) write_scene(dir, kfs, scene.reference());
+    const eval::Reference& ref = scene.reference();
+    OccupancyMap<OcKey> octo_map(res), knn_map(res), robust_map(res);
+    rr.octo.push_back(run_model(kfs, ref, res, crop, OctoMapModel{}, dir, "octomap", &octo_map));
+    rr.knn.push_back(run_model(kfs, ref, res, crop, knn, dir, "knn", &knn_map));
+    rr.robust.push_back(run_model(kfs, ref, res, crop, robust, dir, "robust", &robust_map));
+    if (!dir.empty()) write_comparison(dir, octo_map, knn_map, robust_map, ref, res);
+    for (const auto& [name, r] : {std::pair<const char*, const Row&>{"octomap", rr.octo.back()},
+                                  std::pair<const char*, const Row&>{"knn", rr.knn.back()},
+                                  std::pair<const char*, const Row&>{"robust", rr.robust.back()}})
+      std::printf("%-5ld %-8s %8zu %8zu %6zu %8zu %8zu %10zu %11zu %8.3f\n", s, name, r.m.occupied,
+                  r.m.free, r.m.shell, r.m.in_shell, r.m.covered, r.m.irrelevant, r.m.free_inside,
+                  r.median_ms);
+    shell += rr.octo.back().m.shell;
+  }
+  print_table(regime, seeds, shell, rr);
+  print_goals(rr);
   std::printf(
       "%zu keyframe points, %zu of them wrong matches; %.1f %% of the distinct map points seen by "
       "one keyframe (real stereo set: 6.6 %%)\n\n",
@@ -265,29 +325,11 @@ inline void run_regime(const sim::Regime& regime, long first, long seeds, double
 
 }  // namespace demo
 
-inline int run_demo(const std::vector<std::string>& argv) {
-  const auto at = std::find(argv.begin(), argv.end(), "--scene");
-  if (at != argv.end() && at + 1 != argv.end()) {
-    if (at[1] == "room") return run_room_demo(argv);
-    if (at[1] == "loop") return run_loop_demo(argv);
-    if (at[1] != "tree")
-      throw UsageError("--scene must be tree or room (or loop), got '" + at[1] + "'");
-  }
-  const Args args(argv,
-                  {"--scene", "--regime", "--seeds", "--first-seed", "--res", "--crop", "--out",
-                   "--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"},
-                  {});
-  if (args.help()) {
-    std::fputs(demo_help(), stdout);
-    return 0;
-  }
-  const long seeds = args.integer("--seeds", 5), first = args.integer("--first-seed", 1);
-  if (seeds < 1 || seeds > 1000) throw UsageError("--seeds must be in [1, 1000]");
-  if (first < 0 || first > 1000000000) throw UsageError("--first-seed must be in [0, 1e9]");
-  const double res = args.number("--res", 0.1);
-  if (!(res >= 0.02 && res <= 1.0)) throw UsageError("--res must be in [0.02, 1] for the demo");
-  const double crop = args.number("--crop", 4.0);
-  if (!(crop > 0)) throw UsageError("--crop must be > 0");
+int run_demo(const Args& args) {
+  use_memory_limit(args);
+  const long seeds = args.integer("--seeds"), first = args.integer("--first-seed");
+  const double res = args.number("--res");
+  const double crop = args.number("--crop");
   const KnnModel knn(knn_params(args));
   const KnnModelParams& kp = knn.params();
   RobustModelParams rp;
@@ -298,15 +340,13 @@ inline int run_demo(const std::vector<std::string>& argv) {
   // Refuses a non-empty folder before any work; the folder is built aside, renamed at the end.
   std::unique_ptr<io::StagingDir> stage;
   if (!out.empty()) stage = std::make_unique<io::StagingDir>(out, demo::is_demo_output);
-  const std::string which = args.str("--regime", "all");
+  const std::string which = args.str("--regime");
   std::vector<sim::Regime> regimes;
   if (which == "all") {
     regimes = sim::named_regimes();
   } else {
     sim::Regime r;
-    if (!sim::find_regime(which, r))
-      throw UsageError("--regime must be isolated, clustered, repeated, realistic or all, got '" +
-                       which + "'");
+    if (!sim::find_regime(which, r)) throw UsageError("--regime: no regime '" + which + "'");
     regimes.push_back(r);
   }
 

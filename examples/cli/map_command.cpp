@@ -1,0 +1,459 @@
+// knnocc map: build an occupancy map from a sequence folder, a .graph file or a point file.
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <knnocc/io/scan_source.hpp>
+#include <knnocc/io/voxel_list.hpp>
+#include <knnocc/mapper.hpp>
+#include <knnocc/sensor/knn_model.hpp>
+#include <knnocc/sensor/robust_model.hpp>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "common_options.hpp"
+#include "input_guard.hpp"
+#include "live_corrections.hpp"
+#include "map_outputs.hpp"
+#include "map_snapshots.hpp"
+#include "output_set.hpp"
+#include "progress.hpp"
+#include "resource_limits.hpp"
+#include "view_frame.hpp"
+
+namespace knnocc::cli {
+
+namespace {
+
+const char* kMapText = R"(Builds an occupancy map and prints one summary line:
+  clouds N points N occupied N free N seconds S
+(occupied/free: finest-level voxels in the map; points: points inserted, after --crop), then
+`wrote FILE ...` listing every file written.
+
+input (-i, --input PATH):
+  a sequence folder     poses.txt (sensor to world; TUM "stamp tx ty tz qx qy qz qw" or KITTI
+                        3x4 "r11 r12 r13 tx r21 ... tz" lines) and clouds/NNNNNN.{ply,pcd,bin,xyz}
+                        (points in the sensor frame, cloud i <-> pose line i); a KITTI
+                        sequence: velodyne/*.bin + poses.txt + calib.txt (its Tr is applied)
+  an OctoMap .graph     scans with their poses (OctoMap's ScanGraph)
+  a point file          .ply, .pcd (VIEWPOINT = sensor pose), KITTI .bin, or ASCII
+                        .xyz/.dat/.txt (x y z per line); sensor at the origin
+Which model for which sensor: sparse visual-SLAM keyframes with map-point ids -> robust; dense
+depth cameras / LiDAR -> octomap (knn removes far, sparser surfaces of dense clouds; robust
+without ids is octomap's model).
+)";
+
+const char* kKnnText =
+    R"(  The map point cloud is the union of the keyframes (clouds with an `id` property: ORB-SLAM
+  map points, each joins once; without ids every point is a new map point); s_p = mean distance
+  of p to its k nearest map points; the valid s_p (< s-limit) form N(mu, sigma). An endpoint
+  gets Prob = P_u - Phi(s_p) / Phi(mu + w sigma) (P_u - P_w); its voxel receives the sum of
+  logit(Prob) of its endpoints, and it casts a free ray only if Prob > P_w. Prints one more line
+  before the summary:
+    knn k K map_points N valid N mu X sigma X rays R of E median_keyframe_ms T
+  Defaults: the best of the sweep in docs/results.md (build/bin/bench_knn_sweep).
+  --discretize does not apply to the k-NN model. The robust model takes these flags too.
+)";
+
+const char* kRobustText =
+    R"(  For sparse visual-SLAM keyframes with map-point ids. A map point is believed real while
+  P(real) >= 1/2 under a two-class mixture of real structure and wrong matches whose rates are
+  estimated from the sequence itself: how often the keyframes that met the point saw through it
+  (a ray crossed its voxel and ended more than --margin-scale mean k-NN distances beyond), how
+  many points of other keyframes lie near it, and the SLAM system's found/visible counts when
+  the clouds carry them (PLY `found`, `visible`, `observations`). The mixture counts only while
+  its wrong class is less supported than its real one (else every point is believed). A
+  believed point adds eq 13's log-odds (from two detections on at least P_w) and casts its ray
+  from its second detection; a point no longer believed takes its evidence back; one keyframe
+  adds the mean of its endpoints in a voxel. Without map-point ids it is OctoMap's model and
+  keeps no map point cloud (the knn line then says map_points 0). Prints the knn line.
+  Rules, constants, measurements and where it loses: docs/robust_model.md.
+)";
+
+bool nonzero(double v) { return v != 0.0; }
+
+CommandSpec make_map_spec() {
+  CommandSpec s;
+  s.name = "map";
+  s.summary = "build an occupancy map from a sequence folder, a .graph file or a point file";
+  s.usage = "knnocc map --input PATH --res R [options]     (--opt=value works too)";
+  s.text = kMapText;
+  s.groups.push_back(
+      {"options",
+       {Option::text("--input", "PATH", "a sequence folder, an OctoMap .graph or a point file")
+            .alias("-i")
+            .required(),
+        Option::number("--res", "R", "voxel edge in metres; required unless --init-map")
+            .alias("-r")
+            .fallback_text("the --init-map map's")
+            .at_least(kMinResolution),
+        Option::text("--model", "NAME",
+                     "inverse sensor model: octomap (hit 0.7, miss 0.4, clamping 0.1192..0.971, "
+                     "OctoMap's insertPointCloud), knn (the paper's k-NN model, eq 13-15) or "
+                     "robust (see below)")
+            .alias("-m")
+            .fallback("octomap")
+            .one_of({"octomap", "knn", "robust"}),
+        Option::number("--max-range", "M",
+                       "points farther than M from the sensor only free space up to M and mark "
+                       "nothing occupied (OctoMap's maxrange)")
+            .fallback_text("no limit")
+            .satisfies("> 0, or < 0 for no limit", nonzero),
+        Option::number("--crop", "M", "drop points farther than M from their sensor first")
+            .fallback_text("no crop")
+            .above(0),
+        Option::flag("--discretize",
+                     "reduce each cloud to its distinct endpoint voxels first (OctoMap's "
+                     "discretize option; octomap model only)"),
+        Option::text("--out-voxels", "FILE",
+                     "write `x y z logodds` per finest voxel (centre, world frame, %.6f), sorted "
+                     "by x, y, z"),
+        Option::text("--voxels", "WHICH", "which voxels --out-voxels writes")
+            .fallback("all")
+            .one_of({"occupied", "free", "all"}),
+        Option::integer("--first", "I", "start at cloud I (0-based)").fallback("0").at_least(0),
+        Option::integer("--count", "N", "map N clouds").fallback_text("all the rest").at_least(1),
+        Option::text("--init-map", "FILE",
+                     "continue this .ot or .bt map (octomap model only): mapping clouds 0..n-1 "
+                     "to a .ot and then --init-map it --first n gives the same map as one run; "
+                     "a .bt holds only occupied/free (clamped values). A k-NN map cannot be "
+                     "continued from a file: the tracker's map points are not in it"),
+        Option::integer("--save-every", "N",
+                        "every N clouds, write the --out-bt / --out-ot files together "
+                        "(atomically: a killed run leaves the last whole snapshot); their header "
+                        "says which clouds they hold (\"clouds 0 to 14 of SEQ; continue with "
+                        "--first 15\", also in `knnocc info`): resume with --init-map F.ot "
+                        "--first 15")
+            .at_least(1),
+        threads_option(), memory_limit_option(),
+        Option::text("--corrections", "DIR",
+                     "SLAM pose corrections: DIR/after_NNNNNN.txt, the poses of keyframes "
+                     "0..NNNNNN (poses.txt format) known after keyframe NNNNNN, applied then; the "
+                     "map stays equal to mapping with the final poses (sequence folders; octomap "
+                     "and knn models; prints `corrections N reposed_keyframes N median_ms X "
+                     "max_ms X`). Checked first: one name rule, row count, stamps within 1e-4 s "
+                     "of poses.txt's (docs/live_mapping.md)")},
+       ""});
+  s.groups.push_back(map_output_group());
+  s.groups.push_back(knn_model_group("k-NN model (--model knn)", kKnnText));
+  s.groups.push_back({"robust model (--model robust)",
+                      {Option::number("--margin-scale", "X",
+                                      "a ray sees through a map point when it ends more than X "
+                                      "mean k-NN distances beyond it")
+                           .fallback("2")
+                           .at_least(0)
+                           .at_most(100)},
+                      kRobustText});
+  s.footer =
+      "Outputs are never inputs: an output that is an input file (links count) or lies inside an\n"
+      "input folder (the sequence, --corrections DIR) is refused before any work.\n"
+      "exit status: 0 success, 2 bad input (one line on stderr naming the file and the "
+      "problem).\n";
+  return s;
+}
+
+}  // namespace
+
+const CommandSpec& map_spec() {
+  static const CommandSpec spec = make_map_spec();
+  return spec;
+}
+
+namespace {
+
+struct MapOptions {
+  std::string input, which, out_voxels, init_map;
+  double res = 0, max_range = -1, crop = -1, memory_limit = 0;
+  bool discretize = false;
+  unsigned threads = 1;
+  std::size_t first = 0, count = static_cast<std::size_t>(-1), save_every = 0;
+};
+
+/// The file an error in scan i is about: the cloud of a sequence, else the input itself.
+std::string source_path_for_errors(const std::string& input, std::size_t i) {
+  if (io::is_sequence_dir(input)) {
+    try {
+      return io::Sequence::open(input).cloud_path(i);
+    } catch (const std::exception&) {
+    }
+  }
+  return input + (i > 0 ? " (scan " + std::to_string(i) + ")" : "");
+}
+
+/// What a run inserted, for the summary lines.
+struct MapTotals {
+  ScanStats scan;
+  std::size_t clouds = 0, rays = 0, rated = 0;
+  std::vector<double> keyframe_ms;
+
+  void add(const KeyframeStats& ks) {
+    scan.points += ks.scan.points;
+    scan.nonfinite += ks.scan.nonfinite;
+    scan.out_of_range += ks.scan.out_of_range;
+    rays += ks.rays;
+    rated += ks.rated;
+    ++clouds;
+  }
+};
+
+/// The map's share of --memory-limit, and the refusal of work that cannot fit in it, naming the
+/// limit and what to change.
+struct MapBudget {
+  std::string input;
+  double memory_limit = 0;
+  std::size_t share = 0;
+  double res = 0;
+
+  std::size_t enough_bricks() const { return share / kBrickBytesAtLeast; }
+  io::Error too_big(std::size_t i, const std::string& what) const {
+    char res_text[32];
+    std::snprintf(res_text, sizeof res_text, "%g", res);
+    return io::Error(source_path_for_errors(input, i),
+                     what + " at --res " + res_text + ": more than the map's share (" +
+                         format_bytes(double(share)) + ") of --memory-limit " +
+                         format_bytes(memory_limit) +
+                         "; use a coarser --res, a --max-range or --crop, or a higher "
+                         "--memory-limit");
+  }
+};
+
+/// A new map at --res, or the --init-map map to continue.
+template <class Model>
+Mapper<Model> make_mapper(const MapOptions& opt, const Model& model) {
+  const MapperOptions mo{opt.max_range, opt.discretize, opt.threads, {}};
+  if (opt.init_map.empty()) return Mapper<Model>(opt.res, model, mo);
+  OccupancyMap<OcKey> init = read_tree_checked(opt.init_map);
+  if (opt.res > 0 && std::abs(init.grid().resolution() - opt.res) > 1e-12 * opt.res)
+    throw io::Error(opt.init_map,
+                    "resolution " + io::detail::round_trip_text(init.grid().resolution()) +
+                        " differs from --res " + io::detail::round_trip_text(opt.res));
+  if (lower_extension(opt.init_map) == ".bt")
+    std::fprintf(stderr,
+                 "knnocc map: %s: a .bt holds only occupied/free; continuing from clamped "
+                 "log-odds (a .ot continues exactly)\n",
+                 opt.init_map.c_str());
+  return Mapper<Model>(std::move(init), model, mo);
+}
+
+/// Points of one scan in the world frame, kept between scans so their memory is reused.
+struct WorldPoints {
+  std::vector<Point3f> f;  // OctoMap model: float points, as liboctomap
+  std::vector<Point3d> d;  // k-NN model: double, as the tracker keeps them
+  std::vector<std::uint64_t> ids;
+  std::vector<PointEvidence> evidence;  // the SLAM counters, when the clouds carry them
+};
+
+/// Scan i into the map: cropped, moved to the world frame, refused when its bricks surely pass
+/// the budget.
+template <class Model>
+KeyframeStats insert_scan(Mapper<Model>& mapper, io::Scan& scan, std::size_t i,
+                          const MapOptions& opt, const MapBudget& budget, WorldPoints& w) {
+  const Point3d origin{scan.pose.t.x(), scan.pose.t.y(), scan.pose.t.z()};
+  const double res = mapper.map().grid().resolution();
+  const std::size_t enough = budget.enough_bricks();
+  if constexpr (Mapper<Model>::uses_map_cloud) {
+    // --crop: distance to the sensor, measured while the points are still in the sensor frame.
+    io::keyframe_to_world(scan.pose, scan.cloud, opt.crop, w.d, w.ids, &w.evidence);
+    if (at_least_bricks(origin, w.d, res, -1.0, false, enough) > enough)
+      throw budget.too_big(i,
+                           "the points alone need more than " + std::to_string(enough) + " bricks");
+    try {
+      return mapper.insert_keyframe(scan.pose.t, w.d, w.ids, w.evidence);
+    } catch (const std::invalid_argument& e) {  // e.g. clouds with and without ids mixed
+      throw io::Error(source_path_for_errors(opt.input, i), e.what());
+    }
+  } else {
+    std::vector<Point3f>& pts = scan.cloud.points;
+    std::vector<std::uint64_t> no_ids;
+    crop_points(pts, no_ids, opt.crop);
+    if (io::is_identity(scan.pose))
+      w.f.swap(pts);
+    else
+      io::transform_to_world(scan.pose, pts, w.f);
+    if (at_least_bricks(origin, w.f, res, opt.max_range, true, enough) > enough)
+      throw budget.too_big(i, "its rays need more than " + std::to_string(enough) + " bricks (" +
+                                  format_bytes(double(enough) * kBrickBytesAtLeast) + ")");
+    return mapper.insert_keyframe(scan.pose.t, w.f);
+  }
+}
+
+/// The notes on skipped points and an empty map, the k-NN line and the summary line.
+template <class Model>
+void report_map(const Mapper<Model>& mapper, const Model& model, const MapOptions& opt,
+                MapTotals& totals, std::chrono::steady_clock::time_point t0) {
+  const auto& map = mapper.map();
+  const ScanStats& total = totals.scan;
+  note_skipped_points(opt.input, total.nonfinite, total.out_of_range, map.grid().max_coord());
+  note_empty_map(opt.input, totals.clouds, total.points, map, model);
+  if constexpr (Mapper<Model>::uses_map_cloud) {
+    const auto& tr = mapper.tracker();
+    // Dense input (depth camera, LiDAR): the paper's s-rating removes far, sparser surfaces.
+    const std::size_t per_cloud = totals.clouds ? total.points / totals.clouds : 0;
+    if constexpr (!Mapper<Model>::contextual)
+      if (totals.clouds > 0 && tr.N() > 0 && (tr.mu() < 0.5 * opt.res || per_cloud > 20000))
+        std::fprintf(stderr,
+                     "knnocc map: %s: warning: dense input (mean k-NN distance %.3g m at --res %g, "
+                     "%zu points per cloud): the k-NN model removes far, sparser surfaces of "
+                     "dense clouds; --model octomap (or robust) keeps them\n",
+                     opt.input.c_str(), tr.mu(), opt.res, per_cloud);
+    std::vector<double>& ms = totals.keyframe_ms;
+    std::sort(ms.begin(), ms.end());
+    std::printf(
+        "knn k %zu map_points %zu valid %zu mu %.6f sigma %.6f rays %zu of %zu "
+        "median_keyframe_ms %.3f\n",
+        tr.params().k, tr.size(), tr.N(), tr.mu(), tr.sigma(), totals.rays, totals.rated,
+        ms.empty() ? 0.0 : ms[ms.size() / 2]);
+  }
+  const auto counts = map.count_voxels();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("clouds %zu points %zu occupied %zu free %zu seconds %.3f\n", totals.clouds,
+              total.points, counts.occupied, counts.free, seconds);
+}
+
+/// --out-voxels and the map files, all written and then all renamed; `note` goes into the
+/// .bt/.ot headers (map_snapshots.hpp).
+template <class Map>
+std::vector<std::string> write_outputs(const Map& map, const Args& args, const MapOptions& opt,
+                                       UpAxis up, const std::string& title,
+                                       const std::string& note) {
+  std::vector<std::string> written;
+  io::CommitGroup outputs;
+  if (!opt.out_voxels.empty()) {
+    io::write_voxel_list(opt.out_voxels, io::voxel_records(map, voxel_selection(opt.which)));
+    written.push_back(opt.out_voxels);
+  }
+  write_map_outputs(map, args, up, title, written, note);
+  outputs.commit();
+  return written;
+}
+
+template <class Model>
+int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Mapper<Model> mapper = make_mapper(opt, model);
+  const MapBudget budget{opt.input, opt.memory_limit, map_memory_share(opt.memory_limit),
+                         mapper.map().grid().resolution()};
+  mapper.map().set_memory_limit(budget.share);
+  const io::ScanSource source = io::ScanSource::open(opt.input);
+  if (opt.first > source.size() || (opt.first == source.size() && source.size() > 0))
+    throw UsageError("--first " + std::to_string(opt.first) + ": " + opt.input + " has " +
+                     std::to_string(source.size()) + " clouds");
+  const std::size_t last = opt.first + std::min(opt.count, source.size() - opt.first);
+  // --save-every: the maps record the clouds they hold (map_snapshots.hpp).
+  HeldClouds held{first_held_cloud(opt.init_map, opt.input, opt.first), last, opt.input};
+  Progress progress("map", last - opt.first);
+  UpEstimator up_estimate;
+  MapTotals totals;
+  WorldPoints world;
+  for (std::size_t i = opt.first; i < last; ++i) try {
+      io::Scan scan = source.load(i);
+      up_estimate.add(scan.pose, scan.cloud.points);
+      const auto a = std::chrono::steady_clock::now();
+      totals.add(insert_scan(mapper, scan, i, opt, budget, world));
+      totals.keyframe_ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
+      progress.update(i + 1 - opt.first);
+      if (opt.save_every && (i + 1 - opt.first) % opt.save_every == 0 && i + 1 < last)
+        save_snapshot(args, mapper.map(),
+                      held_clouds_note(HeldClouds{held.first, i + 1, opt.input}));
+    } catch (const MemoryLimitError&) {
+      throw budget.too_big(i, "the map needs more memory");
+    } catch (const std::bad_alloc&) {
+      throw io::Error(source_path_for_errors(opt.input, i),
+                      out_of_memory_text(opt.memory_limit, "reading or mapping it", budget.res));
+    }
+  progress.finish();
+  const std::vector<std::string> written =
+      write_outputs(mapper.map(), args, opt, up_axis(args, up_estimate.result()),
+                    model_title(model), opt.save_every ? held_clouds_note(held) : std::string());
+  report_map(mapper, model, opt, totals, t0);
+  print_written(written);
+  return 0;
+}
+
+/// The options of a run, checked together (each option's own range is checked by Args).
+MapOptions map_options(const Args& args) {
+  check_map_outputs(args);
+  const OutputList files = requested_outputs(
+      args, {"--out-voxels", "--out-bt", "--out-ot", "--out-ply", "--out-png", "--out-html"});
+  check_outputs(files);
+  check_outputs_not_inputs(files,
+                           requested_inputs(args, {"--input", "--init-map", "--corrections"}));
+  MapOptions opt;
+  opt.input = args.str("--input");
+  if (!args.has("--res") && !args.has("--init-map"))
+    throw UsageError("--res is required (see --help)");
+  opt.res = args.has("--res") ? args.number("--res") : 0.0;
+  opt.max_range = args.number("--max-range", -1.0);
+  opt.crop = args.number("--crop", -1.0);
+  opt.which = args.str("--voxels");
+  opt.discretize = args.flag("--discretize");
+  opt.threads = cap_threads("map", args.integer("--threads"));
+  opt.out_voxels = args.str("--out-voxels");
+  opt.init_map = args.str("--init-map");
+  if (!opt.init_map.empty()) {
+    const std::string e = lower_extension(opt.init_map);
+    if (e != ".ot" && e != ".bt")
+      throw UsageError("--init-map needs an OctoMap .ot or .bt file, got '" + opt.init_map + "'");
+  }
+  opt.first = static_cast<std::size_t>(args.integer("--first"));
+  if (args.has("--count")) opt.count = static_cast<std::size_t>(args.integer("--count"));
+  opt.save_every = static_cast<std::size_t>(args.integer("--save-every", 0));
+  if (opt.save_every > 0 && !args.has("--out-bt") && !args.has("--out-ot"))
+    throw UsageError("--save-every needs --out-bt or --out-ot (the files it writes)");
+  if (args.has("--corrections"))
+    for (const char* whole_run_only : {"--init-map", "--first", "--count", "--save-every"})
+      if (args.has(whole_run_only))
+        throw UsageError(std::string("--corrections maps the whole sequence: it cannot be "
+                                     "combined with ") +
+                         whole_run_only);
+  opt.memory_limit = use_memory_limit(args);
+  return opt;
+}
+
+/// Flags that belong to another model than --model's.
+void check_model_flags(const Args& args, const std::string& model) {
+  if (model == "octomap")
+    for (const char* knn_only : {"--k", "--w", "--p-upper", "--p-w", "--p-free", "--s-limit"})
+      if (args.has(knn_only)) throw UsageError(std::string(knn_only) + " needs --model knn");
+  if (model != "robust" && args.has("--margin-scale"))
+    throw UsageError("--margin-scale needs --model robust");
+  if (model != "octomap" && args.flag("--discretize"))
+    throw UsageError("--discretize applies to --model octomap only");
+  if (model != "octomap" && args.has("--init-map"))
+    throw UsageError(
+        "--init-map needs --model octomap: a k-NN map cannot be continued from a "
+        "file, the tracker's map points and s_p statistics are not in it");
+  if (model == "robust" && args.has("--corrections"))
+    throw UsageError(
+        "--corrections needs --model octomap or knn (the live mapper does not "
+        "take the robust model)");
+}
+
+}  // namespace
+
+int run_map(const Args& args) {
+  const std::string model = args.str("--model");
+  check_model_flags(args, model);
+  const MapOptions opt = map_options(args);
+  if (model == "octomap") {
+    if (args.has("--corrections")) return run_map_corrections(args, opt, OctoMapModel{});
+    return run_map_with(args, opt, OctoMapModel{});
+  }
+  if (model == "robust") {
+    RobustModelParams rp;
+    rp.knn = knn_params(args);
+    rp.margin_scale = args.number("--margin-scale");
+    return run_map_with(args, opt, RobustModel(rp));
+  }
+  if (args.has("--corrections")) return run_map_corrections(args, opt, KnnModel(knn_params(args)));
+  return run_map_with(args, opt, KnnModel(knn_params(args)));
+}
+
+}  // namespace knnocc::cli

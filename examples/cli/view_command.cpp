@@ -1,0 +1,126 @@
+// knnocc view MAP... --out page.html: maps in 3D in one self-contained web page.
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <knnocc/io/octomap_tree.hpp>
+
+#include "args.hpp"
+#include "commands.hpp"
+#include "common_options.hpp"
+#include "input_guard.hpp"
+#include "map_files.hpp"
+#include "output_set.hpp"
+#include "view_page.hpp"
+
+namespace knnocc::cli {
+
+namespace {
+
+constexpr std::size_t kMaxViewMaps = 64;
+
+CommandSpec make_view_spec() {
+  CommandSpec s;
+  s.name = "view";
+  s.summary = "maps in 3D: one self-contained web page (three.js embedded)";
+  s.usage = "knnocc view MAP... --out PAGE.html [options]";
+  s.text =
+      R"(Writes one web page (three.js embedded: it opens without a network) that shows the maps in 3D:
+occupied voxels as cubes coloured by height (the same colours and up axis as the pictures),
+free voxels on a toggle, buttons to switch between the maps (e.g. OctoMap model and k-NN model).
+Drag to turn, shift or right drag to move, the wheel to zoom, r to reset the view.
+Only the faces between an occupied and a non-occupied cell are drawn; a map with more exposed
+faces than --max-faces is drawn at a coarser level (cells of 2, 4, ... voxels, occupied when
+any voxel in them is), and the page says so.
+  MAP                   .bt or .ot (OctoMap trees), or a voxel list (x y z logodds per line, as
+                        --out-voxels writes) named .voxels or .txt, which needs --res; at most 64
+Prints `wrote FILE (N maps)`.
+)";
+  s.groups.push_back(
+      {"options",
+       {Option::text("--out", "FILE", "the page to write").alias("-o").required(),
+        Option::text("--names", "A,B,...", "the maps' names on the page")
+            .fallback_text("the file names"),
+        up_option("z: map files hold no poses"),
+        Option::number("--res", "R", "voxel edge of voxel-list inputs")
+            .alias("-r")
+            .at_least(kMinResolution),
+        Option::integer("--max-faces", "N", "exposed faces drawn per map before coarsening")
+            .fallback(std::to_string(ViewOptions{}.max_faces))
+            .at_least(1000),
+        memory_limit_option()},
+       ""});
+  s.footer = "Exit status 2 on bad input (one line naming the file).\n";
+  s.max_positional = kMaxViewMaps;
+  s.positional_limit_why = "maps fit one page";
+  return s;
+}
+
+/// --names split at commas, one per map (empty: the file names).
+std::vector<std::string> view_names(const Args& args) {
+  std::vector<std::string> names;
+  if (!args.has("--names")) return names;
+  std::string cur;
+  for (const char c : args.str("--names") + ",") {
+    if (c == ',') {
+      names.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  if (names.size() != args.positional().size())
+    throw UsageError("--names has " + std::to_string(names.size()) + " names for " +
+                     std::to_string(args.positional().size()) + " maps");
+  return names;
+}
+
+OccupancyMap<OcKey> read_view_map(const Args& args, const std::string& in) {
+  const std::string ext = lower_extension(in);
+  if (!is_tree_file(in) && ext != ".voxels" && ext != ".txt")
+    throw UsageError("unknown map extension '" + ext + "' of " + in +
+                     " (.bt .ot, or a voxel list .voxels/.txt)");
+  if (!is_tree_file(in) && !args.has("--res"))
+    throw UsageError("the voxel list " + in + " needs --res");
+  return read_map_file(in, is_tree_file(in) ? 0.0 : args.number("--res"));
+}
+
+}  // namespace
+
+const CommandSpec& view_spec() {
+  static const CommandSpec spec = make_view_spec();
+  return spec;
+}
+
+int run_view(const Args& args) {
+  if (args.positional().empty()) throw UsageError("needs at least one MAP (see --help)");
+  const std::string out = args.str("--out");
+  OutputList inputs;
+  for (const std::string& in : args.positional()) inputs.emplace_back("MAP", in);
+  check_outputs({{"--out", out}});
+  check_outputs_not_inputs({{"--out", out}}, inputs);
+  const UpAxis up = args.has("--up") ? parse_up_axis(args.str("--up")) : UpAxis{};
+  ViewOptions opt;
+  opt.max_faces = static_cast<std::size_t>(args.integer("--max-faces"));
+  const std::vector<std::string> names = view_names(args);
+  if (!view_pages_available())
+    throw io::Error(out,
+                    "this knnocc was built without three.js (install libjs-three and "
+                    "configure again)");
+  use_memory_limit(args);
+  std::vector<OccupancyMap<OcKey>> maps;
+  maps.reserve(args.positional().size());
+  for (const std::string& in : args.positional()) maps.push_back(read_view_map(args, in));
+  std::vector<ViewMap> views;
+  for (std::size_t i = 0; i < maps.size(); ++i)
+    views.push_back(
+        {names.empty() ? std::filesystem::path(args.positional()[i]).filename().string() : names[i],
+         &maps[i]});
+  write_view_page(out, views, up, opt);
+  std::printf("wrote %s (%zu map%s)\n", out.c_str(), maps.size(), maps.size() == 1 ? "" : "s");
+  return 0;
+}
+
+}  // namespace knnocc::cli

@@ -1,0 +1,153 @@
+#pragma once
+// Held-out evaluation: map quality on real keyframes without ground truth and without any rule of
+// the model under test. The keyframes are split into F interleaved folds (fold f: the keyframes
+// i with i % F == f); for each fold a map is built from the other folds' keyframes and scored
+// against the fold's own, which the map has not seen:
+//
+//   points        held-out map points (ids) that at least min_views (2) held-out keyframes
+//                 observe: structure that several independent views agree on
+//   recalled      of those, the ones whose voxel (at the point's world position, the first
+//                 held-out observation's) is occupied in the map       recall = recalled / points
+//   rays          the held-out keyframes' rays (sensor -> point) to those points
+//   seen_through  distinct occupied voxels of the map that such a ray passes through before its
+//                 end voxel (the voxels the held-out keyframe saw empty: a contradiction of the
+//                 map by data it was not built from); the origin voxel counts, the end voxel not
+//   occupied      occupied voxels of the map (seen_through is a share of it)
+// Scores are summed over the folds (each fold's map counts its own voxels). Only rays to
+// multi-view points are walked: the ray of a wrong match seen once ends off the surface and
+// would pass through correct structure.
+//
+// The maps come from a caller's function build(train) -> OccupancyMap (train: the indices of the
+// keyframes to map, in sequence order), so the evaluation knows nothing of models or Mapper.
+//
+// Thread safety: functions of their arguments only.
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "../core/config.hpp"
+#include "../core/key.hpp"
+#include "../core/point3.hpp"
+#include "../core/point_traits.hpp"
+#include "../map/occupancy_map.hpp"
+#include "../raycast/dda.hpp"
+
+namespace knnocc::eval {
+
+/// One keyframe: its sensor position and its points in the world frame, one map-point id each.
+struct IdKeyframe {
+  Point3d origin;
+  std::vector<Point3d> points;
+  std::vector<std::uint64_t> ids;
+};
+
+struct HeldoutOptions {
+  std::size_t folds = 5;        ///< interleaved folds (>= 2)
+  std::uint32_t min_views = 2;  ///< held-out keyframes that must observe a scored map point
+  /// The walk stops this far (m) before the point: 0 walks the whole ray up to the end voxel.
+  double end_margin = 0.0;
+};
+
+struct HeldoutScore {
+  std::size_t points = 0, recalled = 0, rays = 0, seen_through = 0, occupied = 0;
+
+  double recall() const { return points ? double(recalled) / double(points) : 0.0; }
+  /// seen_through as a share of the occupied voxels.
+  double seen_through_share() const {
+    return occupied ? double(seen_through) / double(occupied) : 0.0;
+  }
+  HeldoutScore& operator+=(const HeldoutScore& o) {
+    points += o.points;
+    recalled += o.recalled;
+    rays += o.rays;
+    seen_through += o.seen_through;
+    occupied += o.occupied;
+    return *this;
+  }
+};
+
+/// The indices of fold f's keyframes (held_out) or of all the others, in sequence order.
+inline std::vector<std::size_t> fold_indices(std::size_t keyframes, std::size_t folds,
+                                             std::size_t f, bool held_out) {
+  std::vector<std::size_t> out;
+  for (std::size_t i = 0; i < keyframes; ++i)
+    if ((i % folds == f) == held_out) out.push_back(i);
+  return out;
+}
+
+/// Scores `map` against the held-out keyframes `heldout` (indices into `keyframes`);
+/// `seen_through` (optional) receives the seen-through voxels.
+template <class Key>
+HeldoutScore score_heldout(const OccupancyMap<Key>& map, const std::vector<IdKeyframe>& keyframes,
+                           const std::vector<std::size_t>& heldout, const HeldoutOptions& opt = {},
+                           std::vector<Key>* seen_through = nullptr) {
+  struct Seen {
+    Point3d position;
+    std::uint32_t views = 0;
+    std::size_t last = static_cast<std::size_t>(-1);  // keyframe that counted it last
+  };
+  std::unordered_map<std::uint64_t, Seen> seen;
+  for (const std::size_t i : heldout) {
+    const IdKeyframe& kf = keyframes[i];
+    for (std::size_t j = 0; j < kf.points.size() && j < kf.ids.size(); ++j) {
+      auto [it, fresh] = seen.try_emplace(kf.ids[j]);
+      if (fresh) it->second.position = kf.points[j];
+      if (it->second.last != i) ++it->second.views;  // an id counts once per keyframe
+      it->second.last = i;
+    }
+  }
+  HeldoutScore s;
+  const Grid<Key>& g = map.grid();
+  for (const auto& e : seen) {
+    if (e.second.views < opt.min_views) continue;
+    ++s.points;
+    Key k;
+    if (g.point_to_key(e.second.position, k)) s.recalled += map.is_occupied(k).value_or(false);
+  }
+  std::unordered_set<Key, KeyHash> through;
+  for (const std::size_t i : heldout) {
+    const IdKeyframe& kf = keyframes[i];
+    const Point3f o = knnocc::detail::to_point3f(kf.origin);
+    for (std::size_t j = 0; j < kf.points.size() && j < kf.ids.size(); ++j) {
+      if (seen.at(kf.ids[j]).views < opt.min_views) continue;
+      ++s.rays;
+      Point3d end = kf.points[j];
+      if (opt.end_margin > 0) {
+        const double dx = end.x - kf.origin.x, dy = end.y - kf.origin.y, dz = end.z - kf.origin.z;
+        const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+        if (len <= opt.end_margin) continue;
+        const double f = (len - opt.end_margin) / len;
+        end = {kf.origin.x + f * dx, kf.origin.y + f * dy, kf.origin.z + f * dz};
+      }
+      for_each_ray_key(g, o, knnocc::detail::to_point3f(end), [&](const Key& k) {
+        if (map.is_occupied(k).value_or(false)) through.insert(k);
+      });
+    }
+  }
+  s.seen_through = through.size();
+  if (seen_through) seen_through->assign(through.begin(), through.end());
+  s.occupied = map.count_voxels().occupied;
+  return s;
+}
+
+/// All folds: build(train) (train: the other folds' keyframe indices, in order) returns the map
+/// of those keyframes, scored against the fold. folds < 2 or more folds than keyframes:
+/// std::invalid_argument.
+template <class Build>
+HeldoutScore evaluate_heldout(const std::vector<IdKeyframe>& keyframes, const HeldoutOptions& opt,
+                              Build&& build) {
+  if (opt.folds < 2 || opt.folds > keyframes.size())
+    knnocc::detail::invalid_argument("held-out evaluation: folds must be in [2, keyframes]");
+  HeldoutScore total;
+  for (std::size_t f = 0; f < opt.folds; ++f) {
+    const auto map = build(fold_indices(keyframes.size(), opt.folds, f, false));
+    total += score_heldout(map, keyframes, fold_indices(keyframes.size(), opt.folds, f, true), opt);
+  }
+  return total;
+}
+
+}  // namespace knnocc::eval

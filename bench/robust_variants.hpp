@@ -27,12 +27,12 @@ struct WithGaps : RobustRules {
 struct WithoutSupportCheck : RobustRules {
   static constexpr bool support_check = false;
 };
-// Rays from the first detection of a believed point, or from the third.
+// Rays from the first or second detection of a believed point (the model: from the third).
 struct RaysFromOne : RobustRules {
   static constexpr std::uint32_t ray_detections = 1;
 };
-struct RaysFromThree : RobustRules {
-  static constexpr std::uint32_t ray_detections = 3;
+struct RaysFromTwo : RobustRules {
+  static constexpr std::uint32_t ray_detections = 2;
 };
 // Without independent support (the mixture sees every point with none).
 struct WithoutSupport : RobustRules {
@@ -90,7 +90,7 @@ std::vector<RobustVariant> robust_variants(bool ablate, MapSim map_sim, MapReal 
   add("-support", BasicRobustModel<WithoutSupport>{});
   add("-seethru", BasicRobustModel<WithoutSeeThrough>{});
   add("rays1", BasicRobustModel<RaysFromOne>{});
-  add("rays3", BasicRobustModel<RaysFromThree>{});
+  add("rays2", BasicRobustModel<RaysFromTwo>{});
   return v;
 }
 

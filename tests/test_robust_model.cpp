@@ -2,7 +2,7 @@
 // synthetic two-class sample; the model's ledger (views, creator, latest detection, independent
 // support) and see-through counts equal a brute-force recomputation from the keyframes; every map
 // point is believed exactly when its posterior says so, and a voxel whose points are all
-// disbelieved is not occupied; rays from a point's second detection; SLAM evidence reaches the
+// disbelieved is not occupied; rays from a point's third detection; SLAM evidence reaches the
 // model; dense input without ids is mapped as the OctoMap model maps it.
 
 #include <doctest/doctest.h>
@@ -290,7 +290,7 @@ TEST_CASE("robust model: its ledger and see-throughs equal a brute-force recompu
   CHECK(double(wrong_believed) < 0.5 * double(wrong));
 }
 
-TEST_CASE("robust model: rays from a point's second detection, evidence of eq 13") {
+TEST_CASE("robust model: rays from a point's third detection, evidence of eq 13") {
   RobustModelParams params;
   params.knn.k = 50;  // no valid s (N = 0): eq 13 gives every endpoint P_w = 0.65
   Mapper<RobustModel> m(0.1, RobustModel(params));
@@ -306,10 +306,14 @@ TEST_CASE("robust model: rays from a point's second detection, evidence of eq 13
   REQUIRE(m.map().logodds(k).has_value());
   CHECK(*m.map().logodds(k) == doctest::Approx(logodds(0.65)).epsilon(1e-5));
   ks = m.insert_keyframe(origin, pts, ids);
+  CHECK(ks.rays == 0);  // two detections: still none
+  CHECK_FALSE(m.map().logodds(crossed).has_value());
+  CHECK(*m.map().logodds(k) == doctest::Approx(2 * logodds(0.65)).epsilon(1e-5));
+  ks = m.insert_keyframe(origin, pts, ids);
   CHECK(ks.rays == 1);
   CHECK(*m.map().logodds(crossed) == doctest::Approx(logodds(0.4)));  // the free update
-  CHECK(*m.map().logodds(k) == doctest::Approx(2 * logodds(0.65)).epsilon(1e-5));
-  CHECK(m.model().map_points().find(42)->views == 2);
+  CHECK(*m.map().logodds(k) == doctest::Approx(3 * logodds(0.65)).epsilon(1e-5));
+  CHECK(m.model().map_points().find(42)->views == 3);
 }
 
 TEST_CASE("robust model: one keyframe's endpoints in a voxel add their mean") {

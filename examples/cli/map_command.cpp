@@ -69,7 +69,7 @@ const char* kRobustText =
   the clouds carry them (PLY `found`, `visible`, `observations`). The mixture counts only while
   its wrong class is less supported than its real one (else every point is believed). A
   believed point adds eq 13's log-odds (from two detections on at least P_w) and casts its ray
-  from its second detection; a point no longer believed takes its evidence back; one keyframe
+  from its third detection; a point no longer believed takes its evidence back; one keyframe
   adds the mean of its endpoints in a voxel. Without map-point ids it is OctoMap's model and
   keeps no map point cloud (the knn line then says map_points 0). Prints the knn line.
   Rules, constants, measurements and where it loses: docs/robust_model.md.

@@ -25,6 +25,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <string>
 #include <tuple>
@@ -45,6 +46,7 @@
 
 #include "bench_common.hpp"
 #include "quality_grid.hpp"
+#include "robust_variants.hpp"
 
 using namespace knnocc;
 
@@ -80,132 +82,6 @@ eval::Metrics run_sim_2022(const std::vector<sim::SimKeyframe>& kfs, const eval:
   Mapper<Knn2022Model> mapper(0.1, Knn2022Model(bench::knn2022_first_pass(kfs, {})));
   ms += median(sim::map_keyframes(mapper, kfs, -1.0)) / 1000.0;
   return eval::evaluate(mapper.map(), ref);
-}
-
-struct Variant {
-  const char* name;
-  RobustModelParams p;
-};
-
-std::vector<Variant> all_variants(bool ablate) {
-  std::vector<Variant> v;
-  v.push_back({"robust", RobustModelParams{}});
-  if (!ablate) return v;
-  RobustModelParams p;
-  p.min_views = 1;
-  v.push_back({"-views", p});
-  p = {};
-  p.rerate = false;
-  v.push_back({"-rerate", p});
-  p = {};
-  p.use_s = false;
-  v.push_back({"-s", p});
-  p = {};
-  p.bound_voxel = false;
-  v.push_back({"-bound", p});
-  p = {};
-  p.contra_min = 2;
-  v.push_back({"+contra", p});
-  p = {};
-  p.contra_min = 1;
-  p.contra_ratio = 0.0;
-  v.push_back({"+contra1", p});
-  p = {};
-  p.contra_min = 2;
-  p.contra_radius = 0.1;
-  p.contra_margin = 0.2;
-  v.push_back({"+contra.1", p});
-  p = {};
-  p.free_veto = -1.0;
-  v.push_back({"+veto1", p});
-  p = {};
-  p.p_floor = 0.5;
-  v.push_back({"floor.5", p});
-  p = {};
-  p.min_views = 4;
-  v.push_back({"views4", p});
-  p = {};
-  p.support_scale = 0;
-  v.push_back({"-support", p});
-  for (double scale : {1.5, 2.0, 3.0}) {
-    p = {};
-    p.support_scale = scale;
-    v.push_back({scale == 1.5 ? "sup*1.5" : scale == 2.0 ? "sup*2" : "sup*3", p});
-  }
-  p = {};
-  p.min_support = 2;
-  v.push_back({"minsup2", p});
-  p = {};
-  p.min_views = 2;
-  v.push_back({"views2", p});
-  p = {};
-  p.support_scale = 2.5;
-  v.push_back({"sup*2.5", p});
-  p = {};
-  p.early_views = 0;
-  v.push_back({"-early", p});
-  p = {};
-  p.early_support = 8;
-  v.push_back({"early8", p});
-  p = {};
-  p.ray_views = 3;
-  v.push_back({"ray3", p});
-  p = {};
-  p.ray_views = 5;
-  v.push_back({"ray5", p});
-  // temporal consistency for patches (min_span, span_support, span_siblings) and lone_span
-  p = {};
-  p.min_span = 0;
-  p.lone_span = 0;
-  v.push_back({"-span-lone", p});  // the model without both parts
-  p = {};
-  p.min_span = 0;
-  v.push_back({"-span", p});
-  p = {};
-  p.lone_span = 0;
-  v.push_back({"-lone", p});
-  p = {};
-  p.span_siblings = 0;
-  v.push_back({"span_all", p});  // the span rule for every point, not only patches
-  p = {};
-  p.span_support = 8;
-  v.push_back({"span_sup8", p});  // patches surrounded by 8 independent points exempt
-  for (std::uint32_t sib : {2u, 3u, 5u}) {
-    p = {};
-    p.span_siblings = sib;
-    v.push_back({sib == 2 ? "siblings2" : sib == 3 ? "siblings3" : "siblings5", p});
-  }
-  for (std::uint32_t span : {4u, 7u}) {
-    p = {};
-    p.min_span = span;
-    v.push_back({span == 4 ? "span4" : "span7", p});
-  }
-  p = {};
-  p.lone_span = 10;
-  v.push_back({"lone10", p});
-  p = {};
-  p.lone_patches = true;
-  v.push_back({"lone_patch", p});  // the lone rule for patches too
-  // structure beside committed structure (near_views)
-  p = {};
-  p.near_views = 0;
-  v.push_back({"-near", p});
-  for (std::uint32_t views : {2u, 3u}) {
-    p = {};
-    p.near_views = views;
-    v.push_back({views == 2 ? "near2" : "near3", p});
-  }
-  return v;
-}
-
-// The default, and with --match only the variants whose name contains that text.
-std::vector<Variant> variants(bool ablate, const std::string& match) {
-  std::vector<Variant> v = all_variants(ablate);
-  if (match.empty()) return v;
-  std::vector<Variant> out{v.front()};
-  for (std::size_t i = 1; i < v.size(); ++i)
-    if (std::string(v[i].name).find(match) != std::string::npos) out.push_back(v[i]);
-  return out;
 }
 
 // One model over a sequence folder (as `knnocc map --crop`); the map and the median ms per
@@ -278,7 +154,7 @@ struct PointScore {
 
 // One real sequence with map-point ids: each model's map, the multi-view proxies against the
 // OctoMap model's map (and precision/recall against reference points when the set has them).
-void real_ids(const std::string& dir, double res, double crop, const std::vector<Variant>& vars) {
+void real_ids(const std::string& dir, double res, double crop, const std::vector<bench::RobustVariant>& vars) {
   const io::Sequence seq = io::Sequence::open(dir);
   eval::MapPointViews views;
   std::vector<Point3d> w;
@@ -334,9 +210,9 @@ void real_ids(const std::string& dir, double res, double crop, const std::vector
   row("knn", q, knn_ms, extra);
   const double k22_ms = run_knn2022(seq, res, measure);
   row("knn2022", q, k22_ms, extra);
-  for (const Variant& v : vars) {
-    const double ms = run_sequence(seq, res, crop, RobustModel(v.p), measure);
-    row(v.name, q, ms, extra);
+  for (const bench::RobustVariant& v : vars) {
+    const double ms = v.real(seq, res, crop, measure);
+    row(v.name.c_str(), q, ms, extra);
   }
 }
 
@@ -404,11 +280,12 @@ int main(int argc, char** argv) {
       std::printf("bench_robust_model --grid (%s build)\n", KNNOCC_BENCH_BUILD_TYPE);
       return bench::run_grid(g);
     }
-  int seeds = 5;
+  int seeds = 5, first_seed = 1;
   bool ablate = false;
   std::string match;
   std::string data = "../shared/data";
   int repeat = -1, cluster = -1;  // the regimes' own unless given
+  double repeat_prob = -1;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--seeds") && i + 1 < argc)
       seeds = std::atoi(argv[++i]);
@@ -422,6 +299,10 @@ int main(int argc, char** argv) {
       repeat = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--cluster") && i + 1 < argc)
       cluster = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--repeat-prob") && i + 1 < argc)
+      repeat_prob = std::atof(argv[++i]);
+    else if (!std::strcmp(argv[i], "--first-seed") && i + 1 < argc)
+      first_seed = std::atoi(argv[++i]);
   }
   if (seeds < 1) seeds = 1;
   std::printf("bench_robust_model (%s build): tree scene seeds 1..%d, 0.1 m, 4 m crop\n",
@@ -432,17 +313,31 @@ int main(int argc, char** argv) {
         "features\n",
         repeat >= 0 ? std::to_string(repeat).c_str() : "their regime's",
         cluster >= 0 ? std::to_string(cluster).c_str() : "their regime's");
-  const std::vector<Variant> vars = variants(ablate, match);
+  std::vector<bench::RobustVariant> vars = bench::robust_variants(
+      ablate,
+      [](const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& ref, const auto& model,
+         double& ms) { return run_sim(kfs, ref, model, ms); },
+      [](const io::Sequence& seq, const auto& model,
+         const std::function<void(const OccupancyMap<OcKey>&)>& use) {
+        return run_sequence(seq, 0.1, 4.0, model, use);
+      });
+  if (!match.empty())  // the default and the variants whose name contains the text
+    vars.erase(std::remove_if(vars.begin() + 1, vars.end(),
+                              [&](const bench::RobustVariant& v) {
+                                return v.name.find(match) == std::string::npos;
+                              }),
+               vars.end());
   for (const sim::Regime& regime : sim::named_regimes()) {
     Totals octo, knn, k22;
     std::vector<Totals> rob(vars.size());
     double seen_once = 0;
-    for (int s = 1; s <= seeds; ++s) {
+    for (int s = first_seed; s < first_seed + seeds; ++s) {
       sim::TreeSceneParams p = regime.params;
       p.seed = static_cast<std::uint64_t>(s);
       if (repeat >= 0 && p.outlier_repeat > 0) p.outlier_repeat = static_cast<std::size_t>(repeat);
       if (cluster >= 1 && p.outlier_cluster > 1)
         p.outlier_cluster = static_cast<std::size_t>(cluster);
+      if (repeat_prob >= 0 && p.outlier_repeat > 0) p.repeat_prob = repeat_prob;
       sim::TreeScene scene(p);
       const auto kfs = scene.keyframes();
       eval::MapPointViews views;
@@ -457,7 +352,7 @@ int main(int argc, char** argv) {
       knn.add(run_sim(kfs, scene.reference(), KnnModel{}, knn.ms));
       k22.add(run_sim_2022(kfs, scene.reference(), k22.ms));
       for (std::size_t v = 0; v < vars.size(); ++v)
-        rob[v].add(run_sim(kfs, scene.reference(), RobustModel(vars[v].p), rob[v].ms));
+        rob[v].add(vars[v].sim(kfs, scene.reference(), rob[v].ms));
     }
     std::printf("\nregime %-10s seen-once %.1f %% of distinct map points (sums over %d seeds)\n",
                 regime.name.c_str(), 100 * seen_once, seeds);
@@ -472,7 +367,7 @@ int main(int argc, char** argv) {
     row("octomap", octo);
     row("knn", knn);
     row("knn2022", k22);
-    for (std::size_t v = 0; v < vars.size(); ++v) row(vars[v].name, rob[v]);
+    for (std::size_t v = 0; v < vars.size(); ++v) row(vars[v].name.c_str(), rob[v]);
   }
   const std::string stereo = data + "/orbslam2_stereo_keyframes",
                     icl = data + "/icl_living_room_traj2n", tum = data + "/tum_fr2_pioneer_slam2";

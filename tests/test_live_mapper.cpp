@@ -13,6 +13,7 @@
 #include <cstring>
 #include <map>
 #include <random>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -231,6 +232,37 @@ TEST_CASE("live_mapper.knn_model_equals_rebuild_after_random_operations") {
       CHECK(c.at_max > 0);
       CHECK(c.at_min > 0);
     }
+}
+
+TEST_CASE("live_mapper.movable") {
+  for (const bool with_ids : {false, true}) {
+    CAPTURE(with_ids);
+    static_assert(std::is_move_constructible_v<LiveMapper<KnnModel>>);
+    static_assert(std::is_move_assignable_v<LiveMapper<OctoMapModel>>);
+    test::Rng rng(17);
+    const Scene scene(rng, 10.0);
+    LiveMapper<KnnModel> live(0.1);
+    for (int f = 0; f < 6; ++f) {
+      const Frame fr = make_frame(rng, scene, f, with_ids);
+      live.add(static_cast<std::uint64_t>(f), fr.pose, fr.points, fr.ids);
+    }
+    LiveMapper<KnnModel> moved(std::move(live));
+    for (int f = 6; f < 10; ++f) {
+      const Frame fr = make_frame(rng, scene, f, with_ids);
+      moved.add(static_cast<std::uint64_t>(f), fr.pose, fr.points, fr.ids);
+    }
+    moved.repose({{2, make_frame(rng, scene, 3, with_ids).pose}});
+    moved.remove({4});
+    CHECK(moved.size() == 9);
+    check_against_scratch(moved, KnnModel{}, MapperOptions{}, 0.1);
+    LiveMapper<OctoMapModel> octo(0.1), other(0.2);
+    const Frame fr = make_frame(rng, scene, 1, false);
+    octo.add(1, fr.pose, fr.points);
+    other = std::move(octo);
+    other.add(2, make_frame(rng, scene, 2, false).pose, fr.points);
+    other.repose({{1, make_frame(rng, scene, 5, false).pose}});
+    check_against_scratch(other, OctoMapModel{}, MapperOptions{}, 0.1);
+  }
 }
 
 TEST_CASE("live_mapper.bad_operations_change_nothing") {

@@ -1,109 +1,117 @@
-// insertion/map_point_ledger.hpp: views per keyframe, parallax, and contradictions against a
-// brute-force test of every ray against every point.
+// sensor/map_point_ledger.hpp and sensor/voxel_tally.hpp: views once per keyframe, first position
+// kept, stable indices; see-throughs per voxel against a brute-force walk of every shortened ray.
 
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <map>
 #include <random>
+#include <set>
 #include <vector>
 
-#include <knnocc/insertion/map_point_ledger.hpp>
+#include <knnocc/map/occupancy_map.hpp>
+#include <knnocc/raycast/dda.hpp>
+#include <knnocc/sensor/map_point_ledger.hpp>
+#include <knnocc/sensor/voxel_tally.hpp>
 
 using namespace knnocc;
 
-TEST_CASE("ledger: views once per keyframe, first position and direction kept, parallax") {
-  OccupancyMap<OcKey> map(0.1);
-  MapPointLedger<OcKey> l;
-  const Point3d o{0, 0, 0};
-  l.observe(5, {1, 0, 0}, o, 0, map.grid());
-  l.observe(5, {1, 0, 0}, o, 0, map.grid());
-  const auto& e = l.observe(5, {9, 9, 9}, Point3d{1, -1, 0}, 1, map.grid());
+TEST_CASE("ledger: views once per keyframe, first position and creator kept, stable indices") {
+  MapPointLedger l;
+  bool fresh = false, counted = false;
+  CHECK(l.observe(5, {1, 0, 0}, 0, fresh, counted) == 0);
+  CHECK(fresh);
+  CHECK(counted);
+  l.observe(5, {1, 0, 0}, 0, fresh, counted);  // the same keyframe again
+  CHECK_FALSE(fresh);
+  CHECK_FALSE(counted);
+  l.observe(9, {2, 0, 0}, 1, fresh, counted);
+  const auto& e = l.at(l.observe(5, {9, 9, 9}, 3, fresh, counted));
+  CHECK(counted);
   CHECK(e.views == 2);
   CHECK(e.first == 0);  // its creator
-  CHECK(e.last == 1);
+  CHECK(e.last == 3);
   CHECK(e.position.x == 1.0);
-  CHECK(MapPointLedger<OcKey>::parallax(e, {1, 0, 0}, Point3d{1, -1, 0}) ==
-        doctest::Approx(M_PI / 2));
+  CHECK(l.size() == 2);
+  CHECK(l.index_of(5) == 0);
+  CHECK(l.index_of(9) == 1);
+  CHECK(l.index_of(7) == MapPointLedger::kNone);
+  CHECK(l.find(7) == nullptr);
+  CHECK(l.id_at(1) == 9);
+  std::vector<std::uint64_t> order;
+  l.for_each([&](std::uint64_t id, const MapPointLedger::Point&) { order.push_back(id); });
+  CHECK(order == std::vector<std::uint64_t>{5, 9});
 }
 
-TEST_CASE("ledger: contradictions equal a brute-force count; rejected evidence taken back") {
+TEST_CASE("voxel tally: see-throughs equal a brute-force walk, each keyframe once per voxel") {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-2.0, 2.0);
   OccupancyMap<OcKey> map(0.1);
-  MapPointLedger<OcKey> l;
-  std::vector<Point3d> pts;
-  for (std::uint64_t id = 0; id < 300; ++id) {
-    pts.push_back({u(rng), u(rng), u(rng) * 0.2});
-    l.observe(id, pts.back(), Point3d{0, 0, 0}, 0, map.grid());
-    l.find(id)->added = 1.0f;
+  VoxelTally tally;
+  // Cells for the voxels of a few hundred map points: on_pass reports those.
+  std::set<std::uint32_t> cells;
+  std::map<std::uint32_t, std::uint64_t> cell_key;
+  for (int i = 0; i < 300; ++i) {
     OcKey k;
-    REQUIRE(map.grid().point_to_key(pts.back(), k));
-    map.update(k, 1.0f);
+    REQUIRE(map.grid().coord_to_key(u(rng), u(rng), u(rng) * 0.2 + 1.0, k));
+    const std::uint32_t s = tally.slot(k);
+    CHECK(tally.slot(k) == s);
+    CHECK(tally.find(k) == s);
+    cells.insert(s);
+    cell_key[s] = k.pack();
   }
-  const double radius = 0.08, margin = 0.3;
-  std::vector<std::uint32_t> expect(pts.size(), 0);
-  std::size_t total = 0;
-  for (std::size_t kf = 1; kf <= 5; ++kf) {
-    const Point3d o{u(rng), u(rng), 0.5};
-    std::vector<Point3d> ends;
-    std::vector<EndpointRating> r;
-    for (int i = 0; i < 400; ++i) {
-      ends.push_back({u(rng) * 2, u(rng) * 2, u(rng) * 0.3});
-      r.push_back({0.0f, i % 5 != 0});  // some endpoints cast no ray
+  CHECK(tally.size() == cells.size());
+  std::map<std::uint64_t, std::uint32_t> want;
+  for (std::uint32_t kf = 0; kf < 12; ++kf) {
+    const Point3d origin{u(rng) * 0.3, u(rng) * 0.3, 0.0};
+    std::vector<Point3d> pts;
+    for (int j = 0; j < 80; ++j) pts.push_back({u(rng), u(rng), u(rng) * 0.2 + 1.0});
+    const double margin = 0.1 + 0.02 * kf;
+    std::set<std::uint32_t> reported;  // on_pass: once per voxel with a cell the keyframe crossed
+    std::size_t calls = 0;
+    tally.add_keyframe(
+        map.grid(), origin, pts, margin, kf, [](std::size_t j) { return j % 7 != 3; },
+        [&](std::uint32_t slot) {
+          reported.insert(slot);
+          ++calls;
+        });                           // some rays left out
+    std::set<std::uint64_t> crossed;  // brute force: the shortened segment, voxel by voxel
+    std::vector<OcKey> keys;
+    for (std::size_t j = 0; j < pts.size(); ++j) {
+      if (j % 7 == 3) continue;
+      const Point3d& p = pts[j];
+      const double len =
+          std::sqrt((p.x - origin.x) * (p.x - origin.x) + (p.y - origin.y) * (p.y - origin.y) +
+                    (p.z - origin.z) * (p.z - origin.z));
+      if (!(len > margin)) continue;
+      const double f = (len - margin) / len;
+      const Point3d stop{origin.x + (p.x - origin.x) * f, origin.y + (p.y - origin.y) * f,
+                         origin.z + (p.z - origin.z) * f};
+      REQUIRE(
+          compute_ray_keys(map.grid(), detail::to_point3f(origin), detail::to_point3f(stop), keys));
+      for (const OcKey& k : keys) crossed.insert(k.pack());
     }
-    // Brute force: a ray passing within radius, ending > margin beyond, crossing its voxel.
-    for (std::size_t p = 0; p < pts.size(); ++p) {
-      bool hit = false;
-      OcKey pk;
-      REQUIRE(map.grid().point_to_key(pts[p], pk));
-      for (std::size_t j = 0; j < ends.size() && !hit; ++j) {
-        if (!r[j].casts_ray) continue;
-        const double ux = ends[j].x - o.x, uy = ends[j].y - o.y, uz = ends[j].z - o.z;
-        const double len = std::sqrt(ux * ux + uy * uy + uz * uz);
-        if (!(len > margin)) continue;
-        const double px = pts[p].x - o.x, py = pts[p].y - o.y, pz = pts[p].z - o.z;
-        const double t = (px * ux + py * uy + pz * uz) / len;
-        if (!(t > 0 && t < len - margin) || px * px + py * py + pz * pz - t * t > radius * radius)
-          continue;
-        const double f = (len - margin) / len;
-        const Point3f stop = detail::to_point3f(Point3d{o.x + ux * f, o.y + uy * f, o.z + uz * f});
-        std::vector<OcKey> keys;
-        compute_ray_keys(map.grid(), detail::to_point3f(o), stop, keys);
-        for (const OcKey& k : keys) hit = hit || k == pk;
-      }
-      expect[p] += hit;
-      total += hit;
-    }
-    l.contradict(o, ends, r, kf, radius, margin, map,
-                 [](std::uint32_t, std::uint32_t) { return false; });
+    for (const std::uint64_t k : crossed) ++want[k];
+    std::set<std::uint32_t> expect;
+    for (const std::uint32_t s : cells)
+      if (crossed.count(cell_key[s])) expect.insert(s);
+    CHECK(calls == expect.size());
+    CHECK(reported == expect);
   }
-  REQUIRE(total > 20);
-  for (std::size_t p = 0; p < pts.size(); ++p) {
-    CAPTURE(p);
-    CHECK(l.find(p)->contra == expect[p]);
+  std::size_t checked = 0, twice = 0;
+  for (const auto& [key, passes] : want) {
+    CHECK(tally.passes(OcKey::unpack(key)) == passes);
+    ++checked;
+    twice += passes >= 2;
   }
-  // Now reject the points one ray touches: the 1.0 of evidence each added is taken back.
-  std::size_t pick = pts.size();
-  for (std::size_t p = 0; p < pts.size() && pick == pts.size(); ++p)
-    if (std::hypot(pts[p].x, pts[p].y) > 0.8 && !l.find(p)->rejected) pick = p;
-  REQUIRE(pick < pts.size());
-  OcKey k;
-  REQUIRE(map.grid().point_to_key(pts[pick], k));
-  const float before = *map.logodds(k);
-  const Point3d o{0, 0, 0};
-  const Point3d through{pts[pick].x * 3, pts[pick].y * 3, pts[pick].z * 3};
-  std::vector<EndpointRating> ray{{0.0f, true}};
-  std::size_t in_voxel = 0;  // points sharing the voxel, all on the ray's way
-  for (const Point3d& q : pts) {
-    OcKey qk;
-    REQUIRE(map.grid().point_to_key(q, qk));
-    in_voxel += qk == k;
+  for (const std::uint32_t s : cells) {
+    const auto it = want.find(cell_key[s]);
+    CHECK(tally.passes_at(s) == (it == want.end() ? 0u : it->second));
   }
-  const std::size_t rejected = l.contradict(o, {through}, ray, 99, 0.05, 0.3, map,
-                                            [](std::uint32_t, std::uint32_t) { return true; });
-  CHECK(rejected >= 1);
-  CHECK(l.find(pick)->rejected);
-  CHECK(l.find(pick)->added == 0.0f);
-  CHECK(*map.logodds(k) <= before - 1.0f + 1e-6f);
-  CHECK(*map.logodds(k) >= before - float(in_voxel) - 1e-6f);
+  CHECK(checked > 1000);
+  CHECK(twice > 100);  // the keyframes overlap: counts above one are exercised
+  OcKey far;           // a voxel no ray reached
+  REQUIRE(map.grid().coord_to_key(50.0, 50.0, 50.0, far));
+  CHECK(tally.passes(far) == 0);
+  CHECK(tally.find(far) == VoxelTally::kNone);
 }

@@ -14,11 +14,14 @@
 #include <map>
 #include <random>
 #include <set>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <knnocc/mapper.hpp>
 #include <knnocc/raycast/dda.hpp>
 #include <knnocc/sensor/knn_model.hpp>
+#include <knnocc/sensor/robust_model.hpp>
 
 #include "knn_oracle.hpp"
 #include "test_support.hpp"
@@ -288,4 +291,61 @@ TEST_CASE("mapper: bad options are rejected") {
   const std::vector<Point3d> pts = {{1, 1, 1}, {2, 2, 2}};
   CHECK_THROWS_AS(m.insert_keyframe(Point3d{}, pts, std::vector<std::uint64_t>{1}),
                   std::invalid_argument);
+}
+
+namespace {
+
+// Half the keyframes into one Mapper, which is then moved (constructed, then assigned over a
+// Mapper that had mapped something else), the rest into the moved-to one: the map and the k-NN
+// statistics equal a Mapper that was never moved.
+template <class Model>
+void check_moved_mapper_continues(const Model& model, bool with_ids) {
+  static_assert(std::is_move_constructible_v<Mapper<Model>>);
+  static_assert(std::is_move_assignable_v<Mapper<Model>>);
+  test::Rng rng(23);
+  const auto kfs = random_sequence(rng, with_ids, 10);
+  auto insert = [&](Mapper<Model>& m, const Keyframe& kf) {
+    if constexpr (Mapper<Model>::uses_map_cloud)
+      m.insert_keyframe(kf.origin, kf.points, kf.ids);
+    else
+      m.insert_keyframe(kf.origin, kf.points);
+  };
+  Mapper<Model> still(0.1, model);
+  Mapper<Model> first(0.1, model);
+  for (std::size_t i = 0; i < kfs.size() / 2; ++i) {
+    insert(still, kfs[i]);
+    insert(first, kfs[i]);
+  }
+  Mapper<Model> second(std::move(first));
+  Mapper<Model> third(0.2, model);
+  insert(third, kfs.back());
+  third = std::move(second);
+  for (std::size_t i = kfs.size() / 2; i < kfs.size(); ++i) {
+    insert(still, kfs[i]);
+    insert(third, kfs[i]);
+  }
+  CHECK(third.map().grid().resolution() == 0.1);
+  CHECK(voxel_values(third.map()) == voxel_values(still.map()));
+  CHECK(third.map().num_voxels() > 100);
+  if constexpr (Mapper<Model>::uses_map_cloud) {
+    CHECK(third.tracker().size() == still.tracker().size());
+    CHECK(third.tracker().mu() == still.tracker().mu());
+  }
+}
+
+}  // namespace
+
+TEST_CASE("mapper: a moved Mapper continues as one that never moved") {
+  SUBCASE("OctoMap model") { check_moved_mapper_continues(OctoMapModel{}, false); }
+  SUBCASE("k-NN model") { check_moved_mapper_continues(KnnModel{}, true); }
+  SUBCASE("robust model") { check_moved_mapper_continues(RobustModel{}, true); }
+}
+
+TEST_CASE("mapper: one default k for the tracker and the k-NN model") {
+  CHECK(kDefaultK == 8);
+  CHECK(TrackerParams{}.k == kDefaultK);
+  CHECK(KnnModelParams{}.k == kDefaultK);
+  CHECK(KnnModel{}.tracker_params().k == kDefaultK);
+  Mapper<KnnModel> m(0.1);
+  CHECK(m.tracker().params().k == kDefaultK);
 }

@@ -466,3 +466,91 @@ TEST_CASE("io.ply long headers: many properties and elements parsed, past 1 MiB 
           std::string::npos);
   }
 }
+
+TEST_CASE("io.ply SLAM evidence: found, visible and observations read when present") {
+  ScratchDir dir("ply_evidence");
+  SUBCASE("ascii, some of the three, other properties between") {
+    const std::string p = dir.file("ev.ply");
+    write_bytes(p,
+                "ply\nformat ascii 1.0\nelement vertex 2\n"
+                "property float x\nproperty float y\nproperty float z\nproperty uint id\n"
+                "property uchar red\nproperty ushort visible\nproperty int found\n"
+                "end_header\n"
+                "1 2 3 7 255 12 9\n"
+                "4 5 6 8 0 3 0\n");
+    const io::Cloud c = io::read_ply(p);
+    REQUIRE(c.evidence.size() == 2);
+    CHECK(c.evidence[0].found == 9);
+    CHECK(c.evidence[0].visible == 12);
+    CHECK(c.evidence[0].observations == 0);  // absent: 0, unknown
+    CHECK(c.evidence[1].found == 0);
+    CHECK(c.evidence[1].visible == 3);
+    CHECK(c.evidence[0].has_ratio());
+    CHECK(c.ids == std::vector<std::uint64_t>{7, 8});
+  }
+  SUBCASE("binary little and big endian, all three") {
+    for (const char* fmt : {"binary_little_endian", "binary_big_endian"}) {
+      CAPTURE(fmt);
+      const bool big = std::string(fmt) == "binary_big_endian";
+      std::string bytes = std::string("ply\nformat ") + fmt +
+                          " 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                          "property float z\nproperty uint found\nproperty uint visible\n"
+                          "property ushort observations\nend_header\n";
+      auto put = [&](const void* v, std::size_t n) {
+        std::string b(static_cast<const char*>(v), n);
+        if (big) std::reverse(b.begin(), b.end());
+        bytes += b;
+      };
+      const float xyz[3] = {1.0f, 2.0f, 3.0f};
+      for (float f : xyz) put(&f, 4);
+      const std::uint32_t found = 70000, visible = 90000;
+      const std::uint16_t obs = 5;
+      put(&found, 4);
+      put(&visible, 4);
+      put(&obs, 2);
+      const std::string p = dir.file(std::string(fmt) + ".ply");
+      write_bytes(p, bytes);
+      const io::Cloud c = io::read_ply(p);
+      REQUIRE(c.evidence.size() == 1);
+      CHECK(c.evidence[0].found == 70000);
+      CHECK(c.evidence[0].visible == 90000);
+      CHECK(c.evidence[0].observations == 5);
+      CHECK(c.points[0].z == 3.0f);
+    }
+  }
+  SUBCASE("without them the cloud carries none") {
+    const std::string p = dir.file("plain.ply");
+    io::write_ply(p, {{1, 2, 3}});
+    CHECK(io::read_ply(p).evidence.empty());
+  }
+  SUBCASE("kept by keyframe_to_world beside the points it keeps") {
+    io::Cloud c;
+    c.points = {{1, 0, 0}, {9, 0, 0}, {2, 0, 0}};
+    c.ids = {1, 2, 3};
+    c.evidence = {{1, 2, 3}, {4, 5, 6}, {7, 8, 9}};
+    io::Pose pose;
+    std::vector<knnocc::Point3d> w;
+    std::vector<std::uint64_t> ids;
+    std::vector<knnocc::PointEvidence> ev;
+    io::keyframe_to_world(pose, c, 4.0, w, ids, &ev);
+    REQUIRE(ev.size() == 2);
+    CHECK(ev[0].found == 1);
+    CHECK(ev[1].found == 7);
+    CHECK(ids == std::vector<std::uint64_t>{1, 3});
+  }
+  SUBCASE("bad values are refused naming the file") {
+    const std::string p = dir.file("neg.ply");
+    write_bytes(p,
+                "ply\nformat ascii 1.0\nelement vertex 1\n"
+                "property float x\nproperty float y\nproperty float z\nproperty int found\n"
+                "end_header\n1 2 3 -4\n");
+    CHECK_THROWS_WITH_AS(io::read_ply(p), doctest::Contains("found -4"), io::Error);
+    const std::string q = dir.file("real.ply");
+    write_bytes(q,
+                "ply\nformat ascii 1.0\nelement vertex 1\n"
+                "property float x\nproperty float y\nproperty float z\nproperty float visible\n"
+                "end_header\n1 2 3 4.5\n");
+    CHECK_THROWS_WITH_AS(io::read_ply(q), doctest::Contains("'visible' must be an integer"),
+                         io::Error);
+  }
+}

@@ -348,8 +348,8 @@ int run_demo(const Args& args) {
   std::printf(
       "knnocc demo: the paper's experiment on the simulated tree scene (stereo camera circling at "
       "3.5 m),\n%ld seeds, %g m map, points within %g m; k-NN model k %zu w %g P_u %g P_w %g "
-      "s_limit %g; robust model min_views %u\n\n",
-      seeds, res, crop, kp.k, kp.w, kp.p_upper, kp.p_w, kp.s_limit, rp.min_views);
+      "s_limit %g; robust model see-through margin %g mu\n\n",
+      seeds, res, crop, kp.k, kp.w, kp.p_upper, kp.p_w, kp.s_limit, rp.margin_scale);
   const auto t0 = std::chrono::steady_clock::now();
   for (std::size_t i = 0; i < regimes.size(); ++i)
     demo::run_regime(regimes[i], first, seeds, res, crop, knn, robust,

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -69,16 +68,18 @@ const char* kKnnText =
 )";
 
 const char* kRobustText =
-    R"(  An endpoint adds evidence only once its map point has been observed by --min-views
-  keyframes and another keyframe's map point lies within 1.75 times the mean k-NN distance, or
-  by two keyframes and 12 such points lie there (the keyframe that commits it also adds the
-  deferred evidence); a patch (4 points of its own keyframe near it) waits for a keyframe 5
-  keyframes later, a point that is not a patch, seen over 5 keyframes, needs no support, and a
-  point held back whose voxel touches one holding a point committed by those rules adds its
-  evidence without a ray; it casts its free ray from the fourth view on; eq 13 floored at P_w,
-  one keyframe adds the mean of its endpoints in a voxel; without map-point ids it is OctoMap's
-  model and keeps no map point cloud (the knn line then says map_points 0). Prints the knn line.
-  Rules and measurements: docs/robust_model.md.
+    R"(  For sparse visual-SLAM keyframes with map-point ids. A map point is believed real while
+  P(real) >= 1/2 under a two-class mixture of real structure and wrong matches whose rates are
+  estimated from the sequence itself: how often the keyframes that met the point saw through it
+  (a ray crossed its voxel and ended more than --margin-scale mean k-NN distances beyond), how
+  many points of other keyframes lie near it, and the SLAM system's found/visible counts when
+  the clouds carry them (PLY `found`, `visible`, `observations`). The mixture counts only while
+  its wrong class is less supported than its real one (else every point is believed). A
+  believed point adds eq 13's log-odds (from two detections on at least P_w) and casts its ray
+  from its third detection; a point no longer believed takes its evidence back; one keyframe
+  adds the mean of its endpoints in a voxel. Without map-point ids it is OctoMap's model and
+  keeps no map point cloud (the knn line then says map_points 0). Prints the knn line.
+  Rules, constants, measurements and where it loses: docs/robust_model.md.
 )";
 
 const char* kKnn2022Text =
@@ -163,10 +164,12 @@ CommandSpec make_map_spec() {
   s.groups.push_back(knn_model_group("k-NN model (--model knn)", kKnnText));
   s.groups.push_back(knn2022_model_group(kKnn2022Text));
   s.groups.push_back({"robust model (--model robust)",
-                      {Option::integer("--min-views", "N", "keyframes that confirm a map point")
-                           .fallback(std::to_string(RobustModelParams{}.min_views))
-                           .at_least(1)
-                           .at_most(1000)},
+                      {Option::number("--margin-scale", "X",
+                                      "a ray sees through a map point when it ends more than X "
+                                      "mean k-NN distances beyond it")
+                           .fallback("2")
+                           .at_least(0)
+                           .at_most(100)},
                       kRobustText});
   s.footer =
       "Outputs are never inputs: an output that is an input file (links count) or lies inside an\n"
@@ -247,9 +250,9 @@ struct MapBudget {
 
 /// A new map at --res, or the --init-map map to continue.
 template <class Model>
-std::unique_ptr<Mapper<Model>> make_mapper(const MapOptions& opt, const Model& model) {
+Mapper<Model> make_mapper(const MapOptions& opt, const Model& model) {
   const MapperOptions mo{opt.max_range, opt.discretize, opt.threads, opt.occupancy};
-  if (opt.init_map.empty()) return std::make_unique<Mapper<Model>>(opt.res, model, mo);
+  if (opt.init_map.empty()) return Mapper<Model>(opt.res, model, mo);
   OccupancyMap<OcKey> init = read_tree_checked(opt.init_map, opt.occupancy);
   if (opt.res > 0 && std::abs(init.grid().resolution() - opt.res) > 1e-12 * opt.res)
     throw io::Error(opt.init_map,
@@ -260,7 +263,7 @@ std::unique_ptr<Mapper<Model>> make_mapper(const MapOptions& opt, const Model& m
                  "knnocc map: %s: a .bt holds only occupied/free; continuing from clamped "
                  "log-odds (a .ot continues exactly)\n",
                  opt.init_map.c_str());
-  return std::make_unique<Mapper<Model>>(std::move(init), model, mo);
+  return Mapper<Model>(std::move(init), model, mo);
 }
 
 /// Points of one scan in the world frame, kept between scans so their memory is reused.
@@ -268,6 +271,7 @@ struct WorldPoints {
   std::vector<Point3f> f;  // OctoMap model: float points, as liboctomap
   std::vector<Point3d> d;  // k-NN model: double, as the tracker keeps them
   std::vector<std::uint64_t> ids;
+  std::vector<PointEvidence> evidence;  // the SLAM counters, when the clouds carry them
 };
 
 /// A prepared scan's points (MapRun::prepare: sensor frame, cropped) moved to the world frame in
@@ -289,7 +293,7 @@ KeyframeStats insert_scan(Mapper<Model>& mapper, io::Scan& scan, std::size_t i,
   const double res = mapper.map().grid().resolution();
   const std::size_t enough = budget.enough_bricks();
   if constexpr (Mapper<Model>::uses_map_cloud) {
-    io::keyframe_to_world(scan.pose, scan.cloud, -1.0, w.d, w.ids);
+    io::keyframe_to_world(scan.pose, scan.cloud, -1.0, w.d, w.ids, &w.evidence);
     if (at_least_bricks(origin, w.d, res, -1.0, false, enough) > enough)
       throw budget.too_big(i,
                            "the points alone need more than " + std::to_string(enough) + " bricks");
@@ -297,7 +301,7 @@ KeyframeStats insert_scan(Mapper<Model>& mapper, io::Scan& scan, std::size_t i,
       if (w.ids.empty()) run.note_missing_ids();
     run.add_colors(origin, w.d, scan.cloud.colors);
     try {
-      return mapper.insert_keyframe(scan.pose.t, w.d, w.ids);
+      return mapper.insert_keyframe(scan.pose.t, w.d, w.ids, w.evidence);
     } catch (const std::invalid_argument& e) {  // e.g. clouds with and without ids mixed
       throw io::Error(source_path_for_errors(run.input().path, i), e.what());
     }
@@ -323,7 +327,7 @@ void report_map(const Mapper<Model>& mapper, const Model& model, const MapOption
     const auto& tr = mapper.tracker();
     // Dense input (depth camera, LiDAR): the paper's s-rating removes far, sparser surfaces.
     const std::size_t per_cloud = totals.clouds ? total.points / totals.clouds : 0;
-    if constexpr (!Mapper<Model>::rates_context)
+    if constexpr (!Mapper<Model>::contextual)
       if (totals.clouds > 0 && tr.N() > 0 && (tr.mu() < 0.5 * opt.res || per_cloud > 20000))
         std::fprintf(stderr,
                      "knnocc map: %s: warning: dense input (mean k-NN distance %.3g m at --res %g, "
@@ -385,28 +389,28 @@ std::size_t last_cloud(const MapOptions& opt, const io::ScanSource& source) {
 template <class Model>
 int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   const auto t0 = std::chrono::steady_clock::now();
-  std::unique_ptr<Mapper<Model>> mapper = make_mapper(opt, model);
+  Mapper<Model> mapper = make_mapper(opt, model);
   const MapBudget budget{opt.input, opt.memory_limit, map_memory_share(opt.memory_limit),
-                         mapper->map().grid().resolution()};
-  mapper->map().set_memory_limit(budget.share);
+                         mapper.map().grid().resolution()};
+  mapper.map().set_memory_limit(budget.share);
   const io::ScanSource source = io::ScanSource::open(opt.input);
   const std::size_t last = last_cloud(opt, source);
   // --save-every: the maps record the clouds they hold (map_snapshots.hpp).
   HeldClouds held{first_held_cloud(opt.init_map, opt.input, opt.first), last, opt.input};
   Progress progress("map", last - opt.first);
-  MapRun run(opt.scans, mapper->map().grid().resolution());
+  MapRun run(opt.scans, mapper.map().grid().resolution());
   MapTotals totals;
   WorldPoints world;
   for (std::size_t i = opt.first; i < last; ++i) try {
       io::Scan scan = source.load(i);
-      run.prepare(scan, mapper->map().grid(), source_path_for_errors(opt.input, i));
+      run.prepare(scan, mapper.map().grid(), source_path_for_errors(opt.input, i));
       const auto a = std::chrono::steady_clock::now();
-      totals.add(insert_scan(*mapper, scan, i, budget, world, run));
+      totals.add(insert_scan(mapper, scan, i, budget, world, run));
       totals.keyframe_ms.push_back(
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
       progress.update(i + 1 - opt.first);
       if (opt.save_every && (i + 1 - opt.first) % opt.save_every == 0 && i + 1 < last)
-        save_snapshot(args, mapper->map(),
+        save_snapshot(args, mapper.map(),
                       held_clouds_note(HeldClouds{held.first, i + 1, opt.input}));
     } catch (const MemoryLimitError&) {
       throw budget.too_big(i, "the map needs more memory");
@@ -416,9 +420,9 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
     }
   progress.finish();
   std::vector<std::string> written, notes;
-  write_map_run_files(mapper->map(), args, opt, run, run.title(model_title(model)),
+  write_map_run_files(mapper.map(), args, opt, run, run.title(model_title(model)),
                       opt.save_every ? held_clouds_note(held) : std::string(), written, notes);
-  report_map(*mapper, model, opt, totals, t0);
+  report_map(mapper, model, opt, totals, t0);
   print_files(written, notes);
   return 0;
 }
@@ -519,8 +523,8 @@ void check_model_flags(const Args& args, const std::string& model) {
   if (model != "knn2022")
     for (const char* flag : kKnn2022Flags)
       if (args.has(flag)) throw UsageError(std::string(flag) + " needs --model knn2022");
-  if (model != "robust" && args.has("--min-views"))
-    throw UsageError("--min-views needs --model robust");
+  if (model != "robust" && args.has("--margin-scale"))
+    throw UsageError("--margin-scale needs --model robust");
   if (model != "octomap" && args.flag("--discretize"))
     throw UsageError("--discretize applies to --model octomap only");
   if (model != "octomap" && args.has("--init-map"))
@@ -560,7 +564,7 @@ int run_map(const Args& args) {
   if (model == "robust") {
     RobustModelParams rp;
     rp.knn = knn_params(args);
-    rp.min_views = static_cast<std::uint32_t>(args.integer("--min-views"));
+    rp.margin_scale = args.number("--margin-scale");
     return run_map_with(args, opt, RobustModel(rp));
   }
   if (args.has("--corrections"))

@@ -181,8 +181,8 @@ void note_empty_map(const std::string& input, std::size_t clouds, std::size_t po
                     const OccupancyMap<OcKey>& map, const Model&) {
   if (clouds == 0 || map.count_voxels().known() > 0) return;
   const char* why = std::is_same_v<Model, RobustModel>
-                        ? "; the robust model adds a map point's evidence only once --min-views "
-                          "keyframes have seen it"
+                        ? "; the robust model adds a map point's evidence only while it believes "
+                          "the point real (docs/robust_model.md)"
                         : "";
   std::fprintf(stderr,
                "knnocc map: %s: warning: the map is empty: the %zu points of %zu clouds updated no "

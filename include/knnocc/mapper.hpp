@@ -4,8 +4,10 @@
 // where it is declared and checked with a static_assert that names what is missing:
 //
 //   Model       the inverse sensor model (sensor/sensor_model.hpp): OctoMapModel (eq 4, fixed
-//               hit and miss log-odds) or KnnModel (eq 13-15, every endpoint rated by its k-NN
-//               statistics)
+//               hit and miss log-odds), KnnModel (eq 13-15, every endpoint rated by its k-NN
+//               statistics) or a contextual model such as RobustModel (a whole keyframe rated
+//               through the hook of sensor/contextual_model.hpp, by a model that keeps its own
+//               per-map-point state)
 //   Key         the map's key type (OcKey: OctoMap's 16-bit keys; WideKey for larger areas)
 //   Tracker     the map point cloud's k-NN statistics (knn/tracker_concept.hpp), kept only for a
 //               rated model; by default the model's tracker_type (KnnTracker for KnnModel)
@@ -13,13 +15,8 @@
 //               ScanInserter (exact DDA, occupied wins, one update per voxel per scan), or
 //               LayeredScanInserter for a cloud-rated model
 //
-// A rated model may ask for each endpoint's context instead of s alone (RobustModel: `rate(const
-// PointContext&, ...)`, sensor/point_context.hpp); only then does Mapper keep, per map-point id,
-// how many keyframes observed it, its first viewing direction, the evidence it added and the
-// free-space evidence against it (insertion/map_point_ledger.hpp), and look up the endpoint's
-// voxel before the update.
-//
-// so Mapper<OctoMapModel> and Mapper<KnnModel> differ in one type and take the same keyframes. The
+// Mapper<OctoMapModel>, Mapper<KnnModel> and Mapper<RobustModel> differ in one type and take the
+// same keyframes. The
 // model, the tracker and the map may be passed constructed (e.g. KnnTracker<PaperAnnulus> with its
 // own dr and s_max, or a map read from a file to continue it); examples/custom_policies.cpp
 // writes its own sensor model and tracker.
@@ -36,29 +33,36 @@
 //   cloud-rated model (Knn2022Model, sensor/cloud_model.hpp): no map cloud; the model rates the
 //                               keyframe from its own points (rate_cloud) and the keyframe is
 //                               applied with two layers of free space (insert_layered).
+//   contextual model (RobustModel, sensor/contextual_model.hpp): as a rated model, with the
+//                               model's rate_keyframe instead of eq 13-14 per endpoint;
+//                               endpoints it rates {0, no ray} stay out of the scan; then its
+//                               settle_keyframe.
 // max_range keeps OctoMap's meaning for both models: a point farther than max_range from the
 // sensor marks nothing occupied, casts its ray truncated at max_range, and (k-NN model) stays out
 // of the map point cloud. Points with a NaN/Inf coordinate or outside the key range are skipped
 // and counted (ScanStats) and stay out of the map cloud too.
 //
-// Thread safety: one writer; const queries (map(), tracker()) are safe from many threads while no
-// insert runs.
+// A Mapper is movable (its map lives on the heap, where the integrator points); a moved-from
+// Mapper may only be destroyed or assigned to.
+//
+// Thread safety: one writer; const queries (map(), tracker(), model()) are safe from many threads
+// while no insert runs.
 
 #include <cmath>
 #include <cstdint>
 #include <iterator>
 #include <limits>
+#include <memory>
 #include <type_traits>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
 #include "core/config.hpp"
 #include "core/key.hpp"
 #include "core/point3.hpp"
+#include "core/point_evidence.hpp"
 #include "core/point_traits.hpp"
 #include "insertion/layered_scan_inserter.hpp"
-#include "insertion/map_point_ledger.hpp"
 #include "insertion/scan_inserter.hpp"
 #include "insertion/scan_integrator.hpp"
 #include "knn/change_set.hpp"
@@ -66,6 +70,7 @@
 #include "knn/tracker_types.hpp"
 #include "map/occupancy_map.hpp"
 #include "raycast/dda.hpp"
+#include "sensor/contextual_model.hpp"
 #include "sensor/endpoint_rating.hpp"
 #include "sensor/layered_rating.hpp"
 #include "sensor/octomap_model.hpp"
@@ -135,15 +140,15 @@ class Mapper {
   using tracker_type = Tracker;
   using integrator_type = Integrator;
   static constexpr bool uses_map_cloud = detail::uses_map_cloud<Model>::value;
-  /// The model rates endpoints from their PointContext (sensor/sensor_model.hpp).
-  static constexpr bool rates_context = detail::has_context_rate<Model>::value;
   /// The model rates each keyframe from its own cloud (sensor/cloud_model.hpp).
   static constexpr bool rates_cloud = detail::rates_cloud<Model>::value;
+  /// The model rates whole keyframes through the contextual hook (sensor/contextual_model.hpp).
+  static constexpr bool contextual = uses_map_cloud && detail::is_contextual_v<Model, Key, Tracker>;
 
  private:
   // The concepts of the parts, each failing with a message that names what is missing.
   static constexpr bool check_parts() {
-    detail::check_sensor_model<Model>();
+    detail::check_sensor_model<Model, Key, Tracker>();
     if constexpr (uses_map_cloud) {
       static_assert(!std::is_same_v<Tracker, detail::NoTracker>,
                     "a sensor model with uses_map_cloud = true needs a tracker: declare `using "
@@ -173,14 +178,14 @@ class Mapper {
   /// The same with the caller's tracker.
   Mapper(map_type map, Model model, Tracker tracker, MapperOptions options = {})
       : options_(checked(options)),
-        map_(std::move(map)),
+        map_(std::make_unique<map_type>(std::move(map))),
         model_(std::move(model)),
         tracker_(std::move(tracker)),
-        integrator_(map_, model_, options.threads) {}
-  Mapper(Mapper&&) = delete;  // the integrator points at the map
+        integrator_(*map_, model_, options.threads) {}
 
-  const map_type& map() const { return map_; }
-  map_type& map() { return map_; }
+  const map_type& map() const { return *map_; }
+  map_type& map() { return *map_; }
+  /// The model (a contextual model's state too, e.g. RobustModel::map_points()).
   const Model& model() const { return model_; }
   const MapperOptions& options() const { return options_; }
   /// The k-NN statistics of the map point cloud (only with a model that uses them; empty for
@@ -188,12 +193,6 @@ class Mapper {
   template <bool B = uses_map_cloud, std::enable_if_t<B, int> = 0>
   const Tracker& tracker() const {
     return tracker_;
-  }
-
-  /// What a contextual model's Mapper knows per map-point id (views, contradictions, evidence).
-  template <bool B = rates_context, std::enable_if_t<B, int> = 0>
-  const MapPointLedger<Key>& map_points() const {
-    return ledger_;
   }
 
   /// Alg. 3 for one keyframe: `points` in the world frame (any point type), seen from `origin`;
@@ -205,17 +204,29 @@ class Mapper {
   template <class Points, class Origin>
   KeyframeStats insert_keyframe(const Origin& origin, const Points& points,
                                 const std::vector<std::uint64_t>& ids = {}) {
+    return insert_keyframe(origin, points, ids, std::vector<PointEvidence>{});
+  }
+
+  /// The same with the SLAM system's evidence per point (core/point_evidence.hpp; one per point,
+  /// or empty), which a contextual model may use; the other models ignore it.
+  template <class Points, class Origin>
+  KeyframeStats insert_keyframe(const Origin& origin, const Points& points,
+                                const std::vector<std::uint64_t>& ids,
+                                const std::vector<PointEvidence>& evidence) {
     KeyframeStats ks;
     if constexpr (rates_cloud) {
       (void)ids;
       insert_rated_cloud(origin, points, ks);
     } else if constexpr (!uses_map_cloud) {
       (void)ids;
+      (void)evidence;
       ks.scan =
           integrator_.insert_point_cloud(origin, points, options_.max_range, options_.discretize);
     } else {
       use_mode(Mode::keyframe_union);
       if (!load(origin, points, ids, ks)) return ks;
+      if (!evidence.empty() && evidence.size() != world_.size())
+        detail::invalid_argument("insert_keyframe: one PointEvidence per point expected");
       if constexpr (!detail::map_cloud_without_ids<Model>::value) {
         if (ids.empty() && !world_.empty()) {  // rated without the map cloud: none kept
           if (ids_given_)
@@ -224,7 +235,7 @@ class Mapper {
           point_ids_.assign(world_.size(), KeyframeUnion::kNoId);
           for (std::size_t j = 0; j < world_.size(); ++j)
             if (within_range(j)) point_ids_[j] = j;  // any id: the model does not look it up
-          rate_and_insert(ks);
+          rate_and_insert(ks, evidence);
           return ks;
         }
         if (!ids.empty() && without_ids_)
@@ -244,7 +255,7 @@ class Mapper {
       for (std::size_t j = 0, c = 0; j < world_.size(); ++j)
         if (within_range(j)) point_ids_[j] = cloud_map_ids_[c++];
       ks.tracker = tracker_.apply(change);
-      rate_and_insert(ks);
+      rate_and_insert(ks, evidence);
     }
     return ks;
   }
@@ -326,7 +337,7 @@ class Mapper {
   // cloud holds exactly the points that make an occupied update.
   bool within_range(std::size_t j) const {
     return is_finite(world_[j]) &&
-           detail::endpoint_fate(map_.grid(), detail::to_point3f(world_[j]),
+           detail::endpoint_fate(map_->grid(), detail::to_point3f(world_[j]),
                                  detail::to_point3f(origin_),
                                  options_.max_range) == detail::EndpointFate::inserted;
   }
@@ -345,23 +356,11 @@ class Mapper {
   }
 
   // Eq 13-15 for the loaded keyframe, then the scan (Alg. 3).
-  void rate_and_insert(KeyframeStats& ks) {
-    if constexpr (rates_context) {
-      rate_in_context(ks);
-      // Endpoints that add nothing and cast no ray (deferred or rejected map points) stay out of
-      // the scan: their voxels are not touched (a 0 update would make them known, and occupied).
-      kept_world_.clear();
-      kept_ratings_.clear();
-      for (std::size_t j = 0; j < world_.size(); ++j)
-        if (ratings_[j].casts_ray || ratings_[j].logodds != 0.0f) {
-          kept_world_.push_back(world_[j]);
-          kept_ratings_.push_back(ratings_[j]);
-        }
-      ks.scan = integrator_.insert_rated(origin_, kept_world_, kept_ratings_, options_.max_range);
-      ks.scan.points = world_.size();
-      settle_in_context();
-      ++keyframe_;
+  void rate_and_insert(KeyframeStats& ks, const std::vector<PointEvidence>& evidence = {}) {
+    if constexpr (contextual) {
+      rate_keyframe(ks, evidence);
     } else {
+      (void)evidence;
       rate_each(ks);
       ks.scan = integrator_.insert_rated(origin_, world_, ratings_, options_.max_range);
     }
@@ -386,136 +385,35 @@ class Mapper {
     }
   }
 
-  // A contextual model's ratings: each endpoint's PointContext (its map point's views, first
-  // viewing direction and contradictions, its voxel's endpoints in this keyframe and log-odds so
-  // far).
-  void rate_in_context(KeyframeStats& ks) {
+  // A contextual model rates the whole keyframe (sensor/contextual_model.hpp); endpoints it rates
+  // {0, no ray} stay out of the scan; then it settles the keyframe.
+  void rate_keyframe(KeyframeStats& ks, const std::vector<PointEvidence>& evidence) {
     const std::size_t n = world_.size();
-    ratings_.resize(n);
-    keys_.resize(n);
-    key_ok_.assign(n, 0);
-    beside_.assign(n, 0);
-    per_voxel_.clear();
-    for (std::size_t j = 0; j < n; ++j)
-      if (point_ids_[j] != KeyframeUnion::kNoId &&
-          map_.grid().point_to_key(detail::to_point3f(world_[j]), keys_[j])) {
-        key_ok_[j] = 1;
-        ++per_voxel_[keys_[j]];
-      }
-    const RunningNormal& dist = tracker_.distribution();
+    ratings_.assign(n, EndpointRating{0.0f, true});  // kNoId: truncated ray only
+    const KeyframeView<Key, Tracker> view{keyframe_,  origin_,  world_,   point_ids_,
+                                          ids_given_, evidence, tracker_, *map_};
+    model_.rate_keyframe(view, ratings_);
+    kept_world_.clear();
+    kept_ratings_.clear();
     for (std::size_t j = 0; j < n; ++j) {
-      const std::uint64_t id = point_ids_[j];
-      if (id == KeyframeUnion::kNoId) {  // beyond max_range (or non-finite): truncated ray only
-        ratings_[j] = EndpointRating{0.0f, true};
-        continue;
+      if (point_ids_[j] != KeyframeUnion::kNoId) {
+        ++ks.rated;
+        ks.unrated += !tracker_.contains(point_ids_[j]) || std::isnan(tracker_.s(point_ids_[j]));
+        ks.rays += ratings_[j].casts_ray;
       }
-      PointContext c;
-      c.s = tracker_.contains(id) ? tracker_.s(id) : std::numeric_limits<double>::quiet_NaN();
-      const double dx = world_[j].x - origin_.x, dy = world_[j].y - origin_.y,
-                   dz = world_[j].z - origin_.z;
-      c.range = std::sqrt(dx * dx + dy * dy + dz * dz);
-      c.keyframe = keyframe_;
-      if (key_ok_[j]) {
-        c.in_voxel = per_voxel_[keys_[j]];
-        if (const auto v = map_.logodds(keys_[j])) c.voxel_logodds = *v;
-      }
-      if (ids_given_) {
-        const auto& e = ledger_.observe(id, world_[j], origin_, keyframe_, map_.grid());
-        c.views = e.views;
-        c.contradictions = e.contra;
-        c.committed = e.added != 0.0f;
-        c.anchor = e.anchor;
-        c.parallax = MapPointLedger<Key>::parallax(e, world_[j], origin_);
-        c.span = keyframe_ - e.first;
-        if constexpr (detail::has_support<Model>::value) {
-          // Counted until the point commits on its own: the support decision is taken once.
-          const double r = c.anchor ? 0.0 : model_.support_radius(c.views, dist);
-          if (r > 0) c.support = count_support(id, e.first, r, c.siblings);
-        }
-        if constexpr (detail::has_anchors<Model>::value)
-          if (key_ok_[j] && model_.wants_anchors(c)) {
-            c.anchors = ledger_.anchors_around(keys_[j]);
-            beside_[j] = 1;
-          }
-      }
-      ratings_[j] = model_.rate(c, dist);
-      ++ks.rated;
-      ks.unrated += std::isnan(c.s);
-      ks.rays += ratings_[j].casts_ray;
-    }
-  }
-
-  // Map points within r of map point `id` (the tracker's cloud) that a keyframe other than
-  // `first` created (PointContext::support);
-  // `siblings`: the other map points within r that `first` created (PointContext::siblings).
-  std::uint32_t count_support(std::uint64_t id, std::size_t first, double r,
-                              std::uint32_t& siblings) {
-    siblings = 0;
-    if (!tracker_.contains(id)) return 0;
-    tracker_.radius(tracker_.position(id), r * r, near_);
-    std::uint32_t n = 0;
-    for (const auto i : near_) {
-      const std::uint64_t other = tracker_.id_at(i);
-      if (other == id) continue;
-      const auto* e = ledger_.find(other);
-      const bool independent = e == nullptr || e->first != first;
-      n += independent;
-      siblings += !independent;
-    }
-    return n;
-  }
-
-  // After a contextual model's scan: the evidence each map point added, the points held back
-  // beside this keyframe's new anchors, then the free-space evidence of this keyframe's rays
-  // against other map points (MapPointLedger).
-  void settle_in_context() {
-    if (!ids_given_) return;
-    new_anchors_.clear();
-    for (std::size_t j = 0; j < world_.size(); ++j) {
-      if (point_ids_[j] == KeyframeUnion::kNoId || ratings_[j].logodds == 0.0f) continue;
-      if (auto* e = ledger_.find(point_ids_[j])) {
-        e->added += ratings_[j].logodds;
-        if (!e->anchor && !beside_[j]) {  // committed beside anchors: not one itself
-          e->anchor = true;
-          if (e->has_key) new_anchors_.push_back(e->key);
-        }
+      if (ratings_[j].casts_ray || ratings_[j].logodds != 0.0f) {
+        kept_world_.push_back(world_[j]);
+        kept_ratings_.push_back(ratings_[j]);
       }
     }
-    if constexpr (detail::has_anchors<Model>::value) commit_beside(new_anchors_);
-    if constexpr (detail::has_rejects<Model>::value)
-      if (model_.contradiction_radius() > 0)
-        ledger_.contradict(origin_, world_, ratings_, keyframe_, model_.contradiction_radius(),
-                           model_.contradiction_margin(), map_,
-                           [&](std::uint32_t views, std::uint32_t contra) {
-                             return model_.rejects(views, contra);
-                           });
-  }
-
-  // Map points that the model held back before an anchor appeared beside them now add, to the
-  // voxel of their first position, what they add beside anchors (RobustModel::near_views): the
-  // evidence does not depend on whether the anchor or the point came first.
-  void commit_beside(const std::vector<Key>& anchors) {
-    const RunningNormal& dist = tracker_.distribution();
-    for (const Key& a : anchors)
-      ledger_.for_each_around(a, [&](std::uint64_t id, auto& p) {
-        if (p.added != 0.0f || p.anchor || p.rejected || !p.has_key) return;
-        PointContext c;
-        c.s = tracker_.contains(id) ? tracker_.s(id) : std::numeric_limits<double>::quiet_NaN();
-        c.views = p.views;
-        c.span = keyframe_ - p.first;
-        c.keyframe = keyframe_;
-        c.contradictions = p.contra;
-        if (const auto v = map_.logodds(p.key)) c.voxel_logodds = *v;
-        c.anchors = 1;
-        const float l = model_.beside_evidence(c, dist);
-        if (l == 0.0f) return;
-        map_.update(p.key, l);
-        p.added = l;
-      });
+    ks.scan = integrator_.insert_rated(origin_, kept_world_, kept_ratings_, options_.max_range);
+    ks.scan.points = n;
+    model_.settle_keyframe(view, ratings_, *map_);
+    ++keyframe_;
   }
 
   MapperOptions options_;
-  map_type map_;
+  std::unique_ptr<map_type> map_;  // on the heap: the integrator points at it, across moves
   Model model_;
   Tracker tracker_;  // detail::NoTracker for a fixed model
   Integrator integrator_;
@@ -527,19 +425,12 @@ class Mapper {
   std::vector<std::uint64_t> cloud_ids_, cloud_map_ids_, point_ids_, id_scratch_;
   std::vector<EndpointRating> ratings_;
   std::vector<LayeredRating> layered_;  // cloud-rated model only
-  // Contextual model only (rate_in_context).
   bool ids_given_ = false;
   bool without_ids_ = false;  // keyframes without ids kept out of the map cloud (model's choice)
-  std::size_t keyframe_ = 0;
-  MapPointLedger<Key> ledger_;
+  // Contextual model only.
+  std::size_t keyframe_ = 0;  // keyframes rated so far (KeyframeView::index)
   std::vector<Point3d> kept_world_;
   std::vector<EndpointRating> kept_ratings_;
-  std::vector<Key> keys_;
-  std::vector<unsigned char> key_ok_;
-  std::vector<unsigned char> beside_;  // rated from the anchors around it (wants_anchors)
-  std::vector<Key> new_anchors_;
-  std::vector<std::uint32_t> near_;
-  std::unordered_map<Key, std::uint32_t, KeyHash> per_voxel_;
 };
 
 }  // namespace knnocc

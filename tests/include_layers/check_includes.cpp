@@ -32,7 +32,9 @@ const std::map<std::string, std::set<std::string>> kAllowed = {
     {"map", {"core"}},
     {"raycast", {"core", "map"}},
     {"knn", {"core", "stats"}},
-    {"sensor", {"core", "stats", "knn"}},
+    // A contextual model (sensor/contextual_model.hpp) keeps per-map-point state against the map:
+    // it reads and updates voxels and walks rays for free-space evidence.
+    {"sensor", {"core", "stats", "knn", "map", "raycast"}},
     // map/detail/brick_access.hpp: whole-brick writers and readers (apply, tree files, replay).
     {"insertion", {"core", "map", "map/detail", "raycast", "raycast/detail", "sensor"}},
     {"top", {"core", "stats", "map", "raycast", "knn", "sensor", "insertion"}},

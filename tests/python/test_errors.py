@@ -75,8 +75,8 @@ def test_bad_insertion_arguments(knnocc):
 
 def test_bad_mapper_arguments(knnocc):
     for model, params in [("octo", {}), ("octomap", {"k": 5}), ("knn", {"prob_hit": 0.7}),
-                          ("knn", {"min_views": 2}), ("knn", {"k": 0}), ("knn", {"k": 5000}),
-                          ("knn", {"p_w": 0.5}), ("knn", {"w": 9}), ("robust", {"min_views": 0}),
+                          ("knn", {"margin_scale": 2}), ("knn", {"k": 0}), ("knn", {"k": 5000}),
+                          ("knn", {"p_w": 0.5}), ("knn", {"w": 9}), ("robust", {"margin_scale": -1}),
                           ("octomap", {"threads": 0}), ("octomap", {"max_range": 0}),
                           ("octomap", {"clamp_min": 0.6}), ("knn", {"discretize": True})]:
         with pytest.raises(ValueError):

@@ -68,7 +68,7 @@ def test_everything_has_a_docstring(knnocc):
                 assert docstring(getattr(obj, member)), f"{name}.{member}"
 
 
-@pytest.mark.parametrize("needle", ["model=\"octomap\"", "'knn'", "k [8]", "min_views [3]",
+@pytest.mark.parametrize("needle", ["model=\"octomap\"", "'knn'", "k [8]", "margin_scale [2]",
                                     "insert_keyframe", "statistics", "max_range"])
 def test_help_of_mapper_is_useful(knnocc, needle):
     assert needle in pydoc.render_doc(knnocc.Mapper, renderer=pydoc.plaintext)

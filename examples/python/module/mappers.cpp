@@ -88,12 +88,12 @@ ModelOptions options_in(const char* cls, const std::string& model, const py::kwa
       o.knn.p_free = number(v);
     else if (!octomap && key == "s_limit")
       o.knn.s_limit = number(v);
-    else if (robust && key == "min_views")
-      o.min_views = static_cast<std::uint32_t>(integer(v, key, 1, 1000));
+    else if (robust && key == "margin_scale")
+      o.margin_scale = number(v);
     else
       throw py::value_error(std::string(cls) + "(model='" + model + "'): unknown parameter '" +
                             key + "' (takes " + kCommon + ", " + (octomap ? kOctoMap : kKnn) +
-                            (robust ? ", min_views" : "") + ")");
+                            (robust ? ", margin_scale" : "") + ")");
   }
   o.mapper.occupancy = occupancy_params(clamp_min, clamp_max);
   return o;
@@ -163,7 +163,7 @@ Keyword parameters, by model (defaults in brackets):
   'octomap'      prob_hit [0.7], prob_miss [0.4], discretize [False]
   'knn'          k [8], w [0], p_upper [0.9], p_w [0.65], p_free [0.4], s_limit [inf]: the
                  paper's eq 13-15 (docs/library.md, "The k-NN model and the mapper")
-  'robust'       the 'knn' parameters and min_views [3] (Mapper only)
+  'robust'       the 'knn' parameters and margin_scale [2] (Mapper only)
 ValueError for an unknown model or parameter, or a value out of range.)";
 
 constexpr const char* kMapperDoc =

@@ -9,7 +9,7 @@ namespace knnocc::python {
 std::shared_ptr<MapperOwner> make_robust_mapper(double resolution, const ModelOptions& o) {
   RobustModelParams p;
   p.knn = o.knn;
-  p.min_views = o.min_views;
+  p.margin_scale = o.margin_scale;
   return std::make_shared<MapperOf<RobustModel>>(resolution, RobustModel(p), o.mapper);
 }
 

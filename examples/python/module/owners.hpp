@@ -35,7 +35,7 @@ using Pose = cli::EigenPose;
 struct ModelOptions {
   double prob_hit = 0.7, prob_miss = 0.4;  ///< OctoMap model
   KnnModelParams knn;                      ///< k-NN and robust models
-  std::uint32_t min_views = 3;             ///< robust model
+  double margin_scale = 2.0;               ///< robust model (RobustModelParams)
   MapperOptions mapper;                    ///< max_range, discretize, threads, clamping
 };
 

@@ -4,8 +4,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "../core/point3.hpp"  // knnocc::Point3f
-#include "../core/rgb.hpp"     // knnocc::Rgb
+#include "../core/point3.hpp"          // knnocc::Point3f
+#include "../core/point_evidence.hpp"  // knnocc::PointEvidence
+#include "../core/rgb.hpp"             // knnocc::Rgb
 
 namespace knnocc::io {
 
@@ -17,6 +18,10 @@ struct Cloud {
   // One colour per point when the file carries one (PLY uchar red, green, blue; PCD rgb or
   // rgba); empty otherwise.
   std::vector<Rgb> colors;
+  // One per point when the file carries any of the SLAM counters `found`, `visible`,
+  // `observations` (PLY vertex properties, core/point_evidence.hpp; absent ones read 0); empty
+  // otherwise.
+  std::vector<PointEvidence> evidence;
 };
 
 }  // namespace knnocc::io

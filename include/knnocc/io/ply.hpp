@@ -3,13 +3,14 @@
 //
 // Reading supports "format ascii 1.0", "binary_little_endian 1.0" and "binary_big_endian 1.0".
 // The "vertex" element must have scalar properties x, y, z of type float/float32/double/float64
-// (doubles are narrowed to float); an optional integer property "id" fills Cloud::ids, and
-// uchar (uint8) properties "red", "green" and "blue", all three, fill Cloud::colors (colours of
-// another type are skipped). Any other vertex property of a PLY scalar type is skipped. Other
-// elements (e.g. "face" with list properties) are skipped when they follow "vertex"; in binary
-// files an element with a list property *before* "vertex" is rejected, since skipping it would need
-// a per-record walk. comment/obj_info header lines are ignored and CRLF line ends are tolerated in
-// the header.
+// (doubles are narrowed to float); an optional integer property "id" fills Cloud::ids; uchar
+// (uint8) properties "red", "green" and "blue", all three, fill Cloud::colors (colours of another
+// type are skipped); the optional integer properties "found", "visible" and "observations" (a SLAM
+// system's counters for the map point, core/point_evidence.hpp) fill Cloud::evidence. Any other
+// vertex property of a PLY scalar type is skipped. Other elements (e.g. "face" with list
+// properties) are skipped when they follow "vertex"; in binary files an element with a list
+// property *before* "vertex" is rejected, since skipping it would need a per-record walk.
+// comment/obj_info header lines are ignored and CRLF line ends are tolerated in the header.
 //
 // NaN and Inf coordinates are NOT an error here: they are returned as read, and the mapping layer
 // skips and counts them. Every problem with the file itself (cannot open, not a PLY, unknown
@@ -261,6 +262,8 @@ struct PlyVertexLayout {
       if (has_color() && rgb[c] == slot) return c;
     return -1;
   }
+  int evidence[3] = {-1, -1, -1};  // found, visible, observations
+  bool has_evidence() const { return evidence[0] >= 0 || evidence[1] >= 0 || evidence[2] >= 0; }
 };
 
 // The vertex's uchar red, green and blue properties, when it has all three.
@@ -274,6 +277,21 @@ inline void locate_colour(const PlyElement& el, PlyVertexLayout& v) {
     if (prop.is_list || prop.type != PlyType::u8) return;
   }
   for (int c = 0; c < 3; ++c) v.rgb[c] = slots[c];
+}
+
+// The vertex properties of PointEvidence, in PlyVertexLayout::evidence's order.
+inline const char* const kEvidenceNames[3] = {"found", "visible", "observations"};
+
+// A SLAM counter as read (an integer in [0, 2^32 - 1]).
+inline std::uint32_t evidence_value(const std::string& path, std::uint64_t vertex, int which,
+                                    std::int64_t value) {
+  if (value < 0 || value > 0xFFFFFFFFll)
+    throw Error(path, "vertex " + std::to_string(vertex) + " has " + kEvidenceNames[which] + " " +
+                          std::to_string(value) + " (must be in [0, 2^32 - 1])");
+  return static_cast<std::uint32_t>(value);
+}
+inline void set_evidence(PointEvidence& e, int which, std::uint32_t value) {
+  (which == 0 ? e.found : which == 1 ? e.visible : e.observations) = value;
 }
 
 inline PlyVertexLayout locate_vertex(const std::string& path, const PlyHeader& h) {
@@ -308,6 +326,14 @@ inline PlyVertexLayout locate_vertex(const std::string& path, const PlyHeader& h
     }
   }
   locate_colour(el, v);
+  for (int k = 0; k < 3; ++k) {
+    v.evidence[k] = el.find(kEvidenceNames[k]);
+    if (v.evidence[k] < 0) continue;
+    const PlyProperty& prop = el.props[static_cast<std::size_t>(v.evidence[k])];
+    if (prop.is_list || ply_type_is_real(prop.type))
+      throw Error(path, std::string("vertex property '") + kEvidenceNames[k] +
+                            "' must be an integer scalar");
+  }
   return v;
 }
 
@@ -387,6 +413,17 @@ inline Cloud read_ply_binary(const std::string& path, const PlyHeader& h, const 
       cloud.colors[i] = Rgb{r[at[0]], r[at[1]], r[at[2]]};
     }
   }
+  if (v.has_evidence()) {
+    cloud.evidence.resize(n);
+    for (int k = 0; k < 3; ++k) {
+      if (v.evidence[k] < 0) continue;
+      const PlyProperty& prop = el.props[static_cast<std::size_t>(v.evidence[k])];
+      for (std::size_t i = 0; i < n; ++i)
+        set_evidence(
+            cloud.evidence[i], k,
+            evidence_value(path, i, k, load_integer(p + i * rec + prop.offset, prop.type, swap)));
+    }
+  }
   return cloud;
 }
 
@@ -461,6 +498,7 @@ inline Cloud read_ply_ascii(const std::string& path, const PlyHeader& h, const P
   cloud.points.resize(n);
   if (v.id >= 0) cloud.ids.resize(n);
   if (v.has_color()) cloud.colors.resize(n);
+  if (v.has_evidence()) cloud.evidence.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     float xyz[3] = {0.0f, 0.0f, 0.0f};
     for (std::size_t j = 0; j < el.props.size(); ++j) {
@@ -503,6 +541,15 @@ inline Cloud read_ply_ascii(const std::string& path, const PlyHeader& h, const P
         }
         std::uint8_t* rgb[3] = {&cloud.colors[i].r, &cloud.colors[i].g, &cloud.colors[i].b};
         *rgb[c] = static_cast<std::uint8_t>(value);
+      } else if (v.has_evidence()) {
+        for (int k = 0; k < 3; ++k) {
+          if (slot != v.evidence[k]) continue;
+          std::int64_t value = 0;
+          if (!parse_int_token(b, e, value))
+            throw Error(path, where(el, i) + ": cannot parse " + quote_token(b, e) +
+                                  " as an integer " + kEvidenceNames[k]);
+          set_evidence(cloud.evidence[i], k, evidence_value(path, i, k, value));
+        }
       }
     }
     cloud.points[i] = Point3f{xyz[0], xyz[1], xyz[2]};

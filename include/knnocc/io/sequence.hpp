@@ -138,11 +138,14 @@ class Sequence {
 
 // The points of a keyframe within max_range of its sensor (max_range <= 0: all of them), in the
 // world frame and in double (R * p + t); `ids` gets the ids of the kept points when the cloud has
-// ids, and is left empty otherwise. The k-NN tracker's input.
+// ids, and is left empty otherwise; `evidence` (optional) likewise gets the kept points' SLAM
+// counters when the cloud has them. The k-NN tracker's input.
 inline void keyframe_to_world(const Pose& pose, const Cloud& cloud, double max_range,
-                              std::vector<Point3d>& world, std::vector<std::uint64_t>& ids) {
+                              std::vector<Point3d>& world, std::vector<std::uint64_t>& ids,
+                              std::vector<PointEvidence>* evidence = nullptr) {
   world.clear();
   ids.clear();
+  if (evidence) evidence->clear();
   const Eigen::Matrix3d R = pose.q.toRotationMatrix();
   for (std::size_t j = 0; j < cloud.points.size(); ++j) {
     const Point3f& p = cloud.points[j];
@@ -152,6 +155,7 @@ inline void keyframe_to_world(const Pose& pose, const Cloud& cloud, double max_r
     const Eigen::Vector3d w = R * Eigen::Vector3d(p.x, p.y, p.z) + pose.t;
     world.push_back(Point3d{w.x(), w.y(), w.z()});
     if (!cloud.ids.empty()) ids.push_back(cloud.ids[j]);
+    if (evidence && !cloud.evidence.empty()) evidence->push_back(cloud.evidence[j]);
   }
 }
 

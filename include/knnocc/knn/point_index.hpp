@@ -181,7 +181,21 @@ class PointIndex {
         recent_tree_(std::move(o.recent_tree_)) {
     views_->base.pts = views_->recent.pts = &pts_;
   }
-  PointIndex& operator=(PointIndex&&) = delete;
+  PointIndex& operator=(PointIndex&& o) noexcept {
+    if (this == &o) return *this;
+    rebuild_min_ = o.rebuild_min_;
+    pts_ = std::move(o.pts_);
+    ids_ = std::move(o.ids_);
+    alive_ = std::move(o.alive_);
+    live_ = o.live_;
+    in_tree_ = o.in_tree_;
+    // Trees first: each refers to its adaptor in views_, which must outlive it.
+    base_tree_ = std::move(o.base_tree_);
+    recent_tree_ = std::move(o.recent_tree_);
+    views_ = std::move(o.views_);
+    views_->base.pts = views_->recent.pts = &pts_;
+    return *this;
+  }
 
   /// Appends a point; it joins the search structure at the next flush().
   index_type append(std::uint64_t id, const Point3d& p) {

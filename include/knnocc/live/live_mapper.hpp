@@ -30,11 +30,12 @@
 //             later keyframe's ratings change, and the tracker's Welford sums cannot be rewound
 //             bit for bit; the map and tracker are rebuilt from scratch (the cost of a rebuild).
 //
+// A LiveMapper is movable; a moved-from one may only be destroyed or assigned to.
+//
 // Thread safety: one writer; const queries are safe from many threads while no operation runs.
 
 #include <algorithm>
 #include <cstdint>
-#include <memory>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -77,13 +78,13 @@ class LiveMapper {
       : resolution_(resolution),
         model_(std::move(model)),
         options_(options),
-        mapper_(std::make_unique<mapper_type>(resolution_, model_, options_)) {}
+        mapper_(resolution_, model_, options_) {}
 
-  const map_type& map() const { return mapper_->map(); }
+  const map_type& map() const { return mapper_.map(); }
   const MapperOptions& options() const { return options_; }
   template <bool B = uses_map_cloud, std::enable_if_t<B, int> = 0>
   const typename mapper_type::tracker_type& tracker() const {
-    return mapper_->tracker();
+    return mapper_.tracker();
   }
   const KeyframeStore<Pose>& keyframes() const { return store_; }
   std::size_t size() const { return store_.size(); }
@@ -103,7 +104,7 @@ class LiveMapper {
       for (const Point3f& p : kf.points) {
         ++s.points;
         const Point3f q = detail::to_point3f(pose_traits<Pose>::to_world(kf.pose, p));
-        switch (detail::endpoint_fate(mapper_->map().grid(), q, o, options_.max_range)) {
+        switch (detail::endpoint_fate(mapper_.map().grid(), q, o, options_.max_range)) {
           case detail::EndpointFate::nonfinite:
             ++s.nonfinite;
             break;
@@ -127,7 +128,7 @@ class LiveMapper {
   /// may not: raise the limit and rebuild().
   void set_memory_limit(std::size_t bytes) {
     memory_limit_ = bytes;
-    mapper_->map().set_memory_limit(bytes);
+    mapper_.map().set_memory_limit(bytes);
   }
   std::size_t memory_limit() const { return memory_limit_; }
 
@@ -161,7 +162,7 @@ class LiveMapper {
     kf.ids = std::move(ids);
     const WorldKeyframe w = to_world(kf);
     kf.reach = reach(w);
-    insert(*mapper_, kf, w);
+    insert(mapper_, kf, w);
     store_.push_back(std::move(kf));
     last_ = LiveUpdate{1, 1, 0, false};
   }
@@ -223,12 +224,12 @@ class LiveMapper {
 
   /// Builds the map (and tracker) again from scratch over the current keyframes.
   void rebuild() {
-    auto fresh = std::make_unique<mapper_type>(resolution_, model_, options_);
-    fresh->map().set_memory_limit(memory_limit_);
+    mapper_type fresh(resolution_, model_, options_);
+    fresh.map().set_memory_limit(memory_limit_);
     for (std::size_t i = 0; i < store_.size(); ++i) {
       const WorldKeyframe w = to_world(store_[i]);
       if constexpr (!uses_map_cloud) store_[i].reach = reach(w);
-      insert(*fresh, store_[i], w);
+      insert(fresh, store_[i], w);
     }
     mapper_ = std::move(fresh);
     last_.replayed = store_.size();
@@ -318,7 +319,7 @@ class LiveMapper {
     }
     last_.replayed = candidates.size();
     const map_type& from = scratch.map();
-    map_type& to = mapper_->map();
+    map_type& to = mapper_.map();
     auto in_region = [&](std::uint64_t coord) {
       const auto o = layout::origin_of(coord);
       const std::array<std::int64_t, 3> b{o[0] >> kBrickBits, o[1] >> kBrickBits,
@@ -362,7 +363,7 @@ class LiveMapper {
   double resolution_;
   Model model_;
   MapperOptions options_;
-  std::unique_ptr<mapper_type> mapper_;
+  mapper_type mapper_;
   std::size_t memory_limit_ = 0;  // 0: none
   KeyframeStore<Pose> store_;
   std::size_t with_ids_ = 0, without_ids_ = 0;  // keyframes with points, by kind (k-NN model)

@@ -32,6 +32,7 @@
 #include "../core/config.hpp"
 #include "../core/log_odds.hpp"
 #include "../knn/tracker.hpp"
+#include "../knn/tracker_types.hpp"
 #include "../stats/welford.hpp"
 #include "endpoint_rating.hpp"
 
@@ -40,11 +41,11 @@ namespace knnocc {
 // Defaults: the best of the documented sweep (bench/bench_knn_sweep.cpp; docs/results.md, "The
 // paper's experiment and the k-NN model's defaults").
 struct KnnModelParams {
-  std::size_t k = 8;     ///< neighbours per map point (s_p = mean distance to them)
-  double w = 0.0;        ///< reliability threshold: s < mu + w * sigma casts a free ray
-  double p_upper = 0.9;  ///< P_u: probability of the most reliable endpoints
-  double p_w = 0.65;     ///< P_w: probability at s = mu + w * sigma
-  double p_free = 0.4;   ///< free-ray probability (l_free = logit(p_free)); OctoMap's miss
+  std::size_t k = kDefaultK;  ///< neighbours per map point (s_p = mean distance to them)
+  double w = 0.0;             ///< reliability threshold: s < mu + w * sigma casts a free ray
+  double p_upper = 0.9;       ///< P_u: probability of the most reliable endpoints
+  double p_w = 0.65;          ///< P_w: probability at s = mu + w * sigma
+  double p_free = 0.4;        ///< free-ray probability (l_free = logit(p_free)); OctoMap's miss
   double s_limit = std::numeric_limits<double>::infinity();  ///< valid s_p < s_limit
 
   /// Rejects values the model is undefined for (std::invalid_argument; abort without exceptions).

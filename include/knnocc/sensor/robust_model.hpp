@@ -1,158 +1,101 @@
 #pragma once
-// RobustModel: an inverse sensor model for sparse visual-SLAM keyframes with realistic wrong
-// matches (clustered, repeated, worse with depth), beyond the paper's k-NN model (knn_model.hpp,
-// which it keeps for the s part). It rates each endpoint from its PointContext
-// (sensor/point_context.hpp), which Mapper gathers for it:
+// RobustModel: an inverse sensor model for sparse visual-SLAM keyframes whose points carry
+// map-point ids (ORB-SLAM map points), for wrong matches that cluster and that the SLAM system
+// re-observes; beyond the paper. docs/robust_model.md has the measurements, the constants and how
+// each was chosen, the ablations and where the model loses.
 //
-//   - multi-view support: an endpoint whose map point has been observed by fewer than min_views
-//     keyframes adds nothing and casts no ray yet (a wrong match is mostly seen by one keyframe);
-//   - re-rating at confirmation: the first keyframe whose endpoint of a map point adds evidence
-//     (normally the one that brings it to min_views) adds what the earlier, deferred observations
-//     would have added (views times its own);
-//   - independent support at a second scale: a confirmed map point commits evidence only once at
-//     least min_support (1) other map points within support_scale (1.75) * mu (mu: the mean of
-//     the k-NN distances s) were created by keyframes other than its own creator; until then it is
-//     deferred like an unconfirmed one, and the count is taken again at each observation as the
-//     cloud grows. A wrong patch is a few points of one keyframe's stereo matching sharing one
-//     depth error, with nothing else near: s at the paper's k cannot tell it from sparse real
-//     structure, which other keyframes' points soon surround;
-//   - early commitment: a map point seen by early_views (2) keyframes commits already when
-//     early_support (12) independent points surround it (sparse views of dense real structure;
-//     a wrong patch has none);
-//   - temporal consistency for patches: a confirmed map point with span_siblings (4) or more
-//     points of its own creator within the support radius (a patch of one keyframe's matching)
-//     commits only once a keyframe at least min_span (5) keyframes after its creator observes
-//     it (span_support: an exemption for patches that many independent points surround, off by
-//     default: with the near rule below it gives back no real structure, and lets wrong patches
-//     among other wrong points through). A wrong patch that the SLAM
-//     system fails to cull is re-observed by the next few keyframes, then vanishes; real
-//     structure keeps being observed while in view. Applied to every point (not only patches)
-//     it costs the real stereo set many multi-view voxels: there 18 % of them hold only points
-//     seen within five consecutive keyframes (bench/diag_robust_model.cpp);
-//   - lone points: a map point that is not a patch, observed over lone_span (5) keyframes
-//     since its creator, commits without independent support (sparse real structure). Patches
-//     are left out: a wrong patch re-observed past lone_span keyframes would commit
-//     (bench_robust_model --repeat 8), and the real stereo set gives the same map either way;
-//   - measured and not kept (diag_robust_model prints the geometry): the angle spread of a
-//     point's viewing rays, and support counted only from creators more than a few keyframes
-//     away. The real set's keyframes are close together: its multi-view points are seen under
-//     small angles (median spread 14 degrees, against 23-34 for the simulator's wrong patches)
-//     and supported by neighbouring keyframes' points, so both lose real structure there;
-//   - structure beside committed structure: a map point that the rules above hold back adds
-//     occupied evidence, but casts no ray, once its voxel or one of the 26 around it holds an
-//     anchor, a map point that committed by the rules above (when the point is observed with an
-//     anchor already there, or, without a new observation, at the end of the keyframe that made
-//     the anchor; points committed by this rule anchor nothing, so it never chains). Sparse
-//     real structure continues committed structure; a wrong match mostly lies off it. On the
-//     real stereo set the voxels that the rules above kept alone were mostly isolated because
-//     their neighbours' points were seen by one or two keyframes; this rule fills those in
-//     (fewer isolated and fewer lost multi-view voxels) and adds no irrelevant nodes in the
-//     simulator (bench_robust_model --ablate, "-near");
-//   - s: a confirmed endpoint's probability is eq 13's, but never below P_w (a point several
-//     keyframes agree on is not pushed towards free, however sparse its neighbourhood);
-//   - free rays from ray_views (4) views on: a map point three keyframes agree on adds occupied
-//     evidence, but carves space only once a fourth one does (fewer wrongly carved voxels in the
-//     simulator, fewer lost and free multi-view voxels on the real stereo set);
-//   - one keyframe's endpoints in one voxel add their mean, not their sum (eq 15 bounded: a patch
-//     of wrong matches cannot outvote the rays through it);
-//   - free-space evidence, both off by default (measured in the bench, they no longer pay): an
-//     endpoint whose voxel already holds log-odds below free_veto adds no occupied evidence
-//     unless its map point has veto_views views; contra_min other keyframes' rays passing
-//     through a map point take its evidence back (insertion/map_point_ledger.hpp);
-//   - without map-point ids (dense sensors: depth cameras, LiDAR) there is no multi-view support:
-//     every endpoint is rated as OctoMap's model rates it (hit, ray), so dense input keeps its
-//     structure (the paper's s-rating removes far, sparser surfaces there); Mapper then keeps no
-//     map point cloud, so its tracker() stays empty (map_cloud_without_ids).
-// Each part can be switched off in RobustModelParams to measure it (bench/bench_robust_model.cpp).
+// A contextual model (sensor/contextual_model.hpp): it keeps a ledger of the map points
+// (sensor/map_point_ledger.hpp) and per-voxel counts (sensor/voxel_tally.hpp), and its rules are:
+//   - a keyframe sees through a map point when one of its rays crosses the point's voxel and ends
+//     more than margin_scale mean k-NN distances (mu) beyond it; every ray counts, whatever the
+//     model decides about its endpoint, before and after the point appeared;
+//   - a map point is believed real when P(real | its detections, see-throughs, independent support
+//     and SLAM found/visible counts) >= 1/2, under a two-class mixture whose rates are estimated
+//     from all map points of the sequence so far (sensor/real_point_mixture.hpp), one EM step per
+//     keyframe;
+//   - the mixture is used only while its wrong class is less supported by other keyframes' points
+//     than its real class; otherwise it has found no wrong matches, and every point is believed;
+//   - a believed point's detection adds the paper's eq 13 log-odds of its s (from two detections
+//     on never below P_w) and, from its third detection on, casts a free ray; the first
+//     detection that finds it believed adds its earlier detections' evidence too;
+//   - one keyframe's endpoints in a voxel add their mean, not their sum (eq 15 bounded), also
+//     when their evidence is added later;
+//   - a point that stops being believed takes its evidence back from its voxel (a voxel left
+//     without a believed point is not left occupied); one that becomes believed between its
+//     detections adds its evidence then, without a ray;
+//   - without map-point ids (dense sensors) every endpoint is rated as OctoMap's model rates it,
+//     and Mapper keeps no map point cloud (map_cloud_without_ids).
+// BasicRobustModel<Rules> lets bench/ measure variants of the rules RobustRules names; the
+// library's model is RobustModel = BasicRobustModel<RobustRules>.
 //
-// Thread safety: immutable after construction; share it freely.
+// Thread safety: written by its Mapper's insert (one writer); const queries are safe while no
+// insert runs.
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "../core/config.hpp"
+#include "../core/detail/flat_index.hpp"
 #include "../core/log_odds.hpp"
+#include "../knn/change_set.hpp"
 #include "../knn/tracker.hpp"
+#include "../map/occupancy_map.hpp"
 #include "../stats/welford.hpp"
+#include "contextual_model.hpp"
 #include "endpoint_rating.hpp"
 #include "knn_model.hpp"
-#include "point_context.hpp"
+#include "map_point_ledger.hpp"
+#include "real_point_mixture.hpp"
+#include "voxel_tally.hpp"
 
 namespace knnocc {
 
 struct RobustModelParams {
-  KnnModelParams knn = {};      ///< eq 13 for the s part (k, w, P_u, P_w, free probability)
-  std::uint32_t min_views = 3;  ///< keyframes that confirm a map point (1: no deferral)
-  std::uint32_t ray_views = 4;  ///< a committed endpoint casts its ray from this many views on
-  bool rerate = true;           ///< the confirming keyframe adds the deferred evidence
-  bool use_s = true;            ///< eq 13 (floored at P_w); false: OctoMap's hit for all
-  bool bound_voxel = true;      ///< one keyframe adds the mean of its endpoints in a voxel
-  double free_veto = -std::numeric_limits<double>::infinity();           ///< see above (off)
-  std::uint32_t veto_views = std::numeric_limits<std::uint32_t>::max();  ///< immune from veto
-  double p_hit = 0.7;  ///< endpoints without map-point ids (OctoMap's hit), and use_s = false
-  /// Free-space evidence (insertion/map_point_ledger.hpp): a map point is rejected, and its
-  /// evidence taken back, once at least contra_min other keyframes' rays passed within
-  /// contra_radius of it and ended more than contra_margin beyond it, and at least contra_ratio
-  /// times its views did (contra_min 0: off, the default: with independent support it no longer
-  /// pays, and its ray walk costs a fifth of the model's time; bench/bench_robust_model.cpp).
-  std::uint32_t contra_min = 0;
-  double contra_ratio = 0.5;
-  double contra_radius = 0.05;  ///< m
-  double contra_margin = 0.3;   ///< m
-  /// Lowest probability of a confirmed endpoint (s part): P_w by default; 0.5 adds nothing
-  double p_floor = -1;  ///< < 0: P_w
-  /// Independent support at a second scale (see above; support_scale 0 or min_support 0: off).
-  double support_scale = 1.75;
-  std::uint32_t min_support = 1;
-  /// A map point with early_views (< min_views) views commits once early_support independent
-  /// points surround it (early_views 0: off): real structure seen twice in a dense region.
-  std::uint32_t early_views = 2;
-  std::uint32_t early_support = 12;
-  /// Temporal consistency for patches (see above; min_span 0: off): a map point with at least
-  /// span_siblings other points of its own creator within the support radius commits only once
-  /// a keyframe at least min_span keyframes after its creator observes it, unless span_support
-  /// independent points surround it (the largest value, the default: no such exemption;
-  /// span_siblings 0: the rule applies to every point).
-  std::uint32_t min_span = 5;
-  std::uint32_t span_support = std::numeric_limits<std::uint32_t>::max();
-  std::uint32_t span_siblings = 4;
-  /// A map point observed over at least lone_span keyframes since its creator commits without
-  /// independent support (0: off).
-  std::uint32_t lone_span = 5;
-  /// The lone rule for patches too (off: a wrong patch that the SLAM system keeps re-observing
-  /// past lone_span keyframes would otherwise commit without support; bench_robust_model
-  /// --repeat 8).
-  bool lone_patches = false;
-  /// Structure beside committed structure (0: off): a map point seen by at least near_views
-  /// keyframes that the rules above hold back adds its occupied evidence, without a ray, once
-  /// its voxel or one of the 26 around it holds an anchor, a map point that committed by those
-  /// rules (PointContext::anchors).
-  std::uint32_t near_views = 1;
+  KnnModelParams knn = {};  ///< eq 13 for the strength of a believed point's evidence
+  /// A ray sees through a point when it ends more than margin_scale * mu beyond it, mu the mean
+  /// k-NN distance of the map point cloud (docs/robust_model.md: how 2 was chosen).
+  double margin_scale = 2.0;
+  double p_hit = 0.7;  ///< endpoints without map-point ids (OctoMap's hit)
 
   void validate() const {
     knn.validate();
-    if (min_views < 1 || min_views > 1000)
-      detail::invalid_argument("min_views must be in [1, 1000], got " + std::to_string(min_views));
+    if (!(margin_scale >= 0 && margin_scale <= 100))
+      detail::invalid_argument("margin_scale must be in [0, 100], got " +
+                               std::to_string(margin_scale));
     if (!(p_hit > 0.5 && p_hit < 1.0))
       detail::invalid_argument("hit probability must be in (0.5, 1), got " + std::to_string(p_hit));
-    if (!(p_floor < 0 || (p_floor >= 0.5 && p_floor < 1)))
-      detail::invalid_argument("p_floor must be in [0.5, 1) (or < 0: P_w)");
-    if (!(contra_ratio >= 0 && contra_ratio <= 100) ||
-        !(contra_radius >= 0 && contra_radius < 10) || !(contra_margin >= 0 && contra_margin < 100))
-      detail::invalid_argument(
-          "contradiction: ratio in [0, 100], radius in [0, 10) m, margin in "
-          "[0, 100) m");
-    if (!(support_scale >= 0 && support_scale <= 100) || min_support > 100000)
-      detail::invalid_argument("support: scale in [0, 100], min_support in [0, 100000]");
-    if (std::isnan(free_veto) || free_veto > 0)
-      detail::invalid_argument("free_veto must be <= 0 (or -inf: off)");
   }
 };
 
-class RobustModel {
+/// The rules a variant may change (bench/robust_variants.hpp); RobustModel uses these.
+struct RobustRules {
+  /// Optional terms of the mixture.
+  static constexpr MixtureTerms terms{};
+  /// A believed point's detection casts its free ray from this many detections on (measured
+  /// against 1 and 2 on the tuning seeds and the stereo set: fewer wrongly carved voxels and more
+  /// nodes in shell, docs/robust_model.md).
+  static constexpr std::uint32_t ray_detections = 3;
+  /// The mixture is used only while its wrong class is less supported than its real class.
+  static constexpr bool support_check = true;
+  /// What the mixture sees of a map point. The SLAM system's count of keyframes observing the
+  /// point stands in for the detections when it is larger (keyframes not given to the mapper).
+  static PointCounts counts(const MapPointLedger::Point& p, const VoxelTally& tally) {
+    PointCounts k;
+    k.d = std::max(p.views, p.slam.observations);
+    k.c = p.voxel == VoxelTally::kNone ? 0 : tally.passes_at(p.voxel);
+    k.u = p.support;
+    if (p.slam.has_ratio()) k.f = p.slam.found, k.v = p.slam.visible;
+    k.g = p.last - p.first + 1 - p.views;
+    return k;
+  }
+};
+
+template <class Rules = RobustRules>
+class BasicRobustModel {
  public:
   static constexpr bool uses_map_cloud = true;
   /// Keyframes without map-point ids are rated as OctoMap's model rates them: Mapper keeps no
@@ -160,106 +103,231 @@ class RobustModel {
   static constexpr bool map_cloud_without_ids = false;
   using tracker_type = KnnTracker<>;
 
-  explicit RobustModel(RobustModelParams params = {}) : params_(params), knn_(params.knn) {
+  explicit BasicRobustModel(RobustModelParams params = {})
+      : params_(params), knn_(params.knn), mixture_(Rules::terms) {
     params_.validate();
     hit_ = static_cast<float>(logodds(params_.p_hit));
-    floor_ = logodds(params_.p_floor < 0 ? params_.knn.p_w : params_.p_floor);
-    ray_views_ = std::max(params_.ray_views, params_.min_views);
+    floor_ = logodds(params_.knn.p_w);
   }
 
   const RobustModelParams& params() const { return params_; }
   TrackerParams tracker_params() const { return params_.knn.tracker_params(); }
   float miss_logodds() const { return knn_.miss_logodds(); }
 
-  /// One endpoint's occupied log-odds and free ray from its context (see the header comment).
-  EndpointRating rate(const PointContext& c, const RunningNormal& dist) const {
-    if (c.views == 0)  // no map-point ids: OctoMap's model (one hit per voxel and scan)
-      return EndpointRating{c.in_voxel > 1 ? hit_ / static_cast<float>(c.in_voxel) : hit_, true};
-    if (commits(c)) return EndpointRating{evidence(c, dist), c.views >= ray_views_};
-    if (beside_anchor(c)) return EndpointRating{evidence(c, dist), false};
-    return EndpointRating{0.0f, false};
+  /// The map points and what the model knows of each.
+  const MapPointLedger& map_points() const { return ledger_; }
+  /// Per-voxel see-throughs and believed points.
+  const VoxelTally& voxels() const { return tally_; }
+  /// The mixture (its rates: rates()).
+  const RealPointMixture& mixture() const { return mixture_; }
+  const RealPointRates& rates() const { return mixture_.rates(); }
+  /// False while the mixture's wrong class is not less supported than its real class (then every
+  /// map point is believed).
+  bool wrong_class_found() const {
+    return !Rules::support_check || mixture_.rates().u_wrong < mixture_.rates().u_real;
+  }
+  /// What the mixture sees of a map point.
+  PointCounts counts(const MapPointLedger::Point& p) const { return Rules::counts(p, tally_); }
+  /// Log-odds that a map point is real, with the current rates (+inf: no wrong class found).
+  double real_log_odds(const MapPointLedger::Point& p) const {
+    if (!wrong_class_found()) return std::numeric_limits<double>::infinity();
+    return mixture_.log_odds(counts(p));
   }
 
-  /// The endpoint commits by the rules of its own map point (multi-view, independent support,
-  /// early commitment, temporal consistency, lone points): its map point is then an anchor.
-  bool commits(const PointContext& c) const {
-    const bool early = params_.early_views > 0 && c.views >= params_.early_views &&
-                       c.support != std::numeric_limits<std::uint32_t>::max() &&
-                       c.support >= params_.early_support;
-    const bool patch =
-        params_.span_siblings == 0 || (c.siblings != std::numeric_limits<std::uint32_t>::max() &&
-                                       c.siblings >= params_.span_siblings);
-    const bool lone =
-        params_.lone_span > 0 && c.span >= params_.lone_span && (params_.lone_patches || !patch);
-    if ((c.views < params_.min_views && !early) || rejects(c.views, c.contradictions) ||
-        (c.support < params_.min_support && !lone))
-      return false;
-    const bool surrounded =
-        c.support != std::numeric_limits<std::uint32_t>::max() && c.support >= params_.span_support;
-    return c.anchor || c.span >= params_.min_span || surrounded || !patch;
-  }
-
-  /// Mapper counts the anchors around the endpoint (PointContext::anchors) only when this says
-  /// they can decide: the near rule is on, the point has near_views views and does not commit
-  /// on its own.
-  bool wants_anchors(const PointContext& c) const {
-    return params_.near_views > 0 && c.views >= params_.near_views &&
-           !rejects(c.views, c.contradictions) && !commits(c);
-  }
-
-  /// What a point that the rules hold back adds beside an anchor that appeared after its last
-  /// observation (Mapper commits it then, without a ray); 0 when the near rule does not apply.
-  float beside_evidence(const PointContext& c, const RunningNormal& dist) const {
-    return beside_anchor(c) ? evidence(c, dist) : 0.0f;
-  }
-
- private:
-  bool beside_anchor(const PointContext& c) const {
-    return params_.near_views > 0 && c.views >= params_.near_views && c.anchors > 0 &&
-           c.anchors != std::numeric_limits<std::uint32_t>::max() &&
-           !rejects(c.views, c.contradictions);
-  }
-
-  // The occupied log-odds of an endpoint that adds evidence: eq 13 floored at P_w, the deferred
-  // views added at the first commitment, free_veto, the voxel's mean (eq 15 bounded).
-  float evidence(const PointContext& c, const RunningNormal& dist) const {
-    double l = hit_;
-    if (params_.use_s) {
-      const double p = knn_.probability(c.s, dist);
-      l = std::max(static_cast<double>(logodds(p)), floor_);
+  /// The contextual hook, before the scan (sensor/contextual_model.hpp).
+  template <class Key, class Tracker>
+  void rate_keyframe(const KeyframeView<Key, Tracker>& kf, std::vector<EndpointRating>& ratings) {
+    count_per_voxel(kf);
+    const RunningNormal& dist = kf.tracker.distribution();
+    for (std::size_t j = 0; j < kf.points.size(); ++j) {
+      const std::uint64_t id = kf.ids[j];
+      if (id == KeyframeUnion::kNoId) continue;  // rated by Mapper: truncated ray only
+      const float share = in_voxel_[j] > 1 ? 1.0f / static_cast<float>(in_voxel_[j]) : 1.0f;
+      if (!kf.has_ids) {  // OctoMap's model (one hit per voxel and scan)
+        ratings[j] = EndpointRating{hit_ * share, true};
+        continue;
+      }
+      bool counted = false;
+      const std::uint32_t i = observe(kf, j, counted);
+      index_[j] = i;
+      MapPointLedger::Point& p = ledger_.at(i);
+      if (counted) p.shares += share;  // once per keyframe, as its views
+      if (!kf.evidence.empty()) p.slam = kf.evidence[j];
+      touch(i, kf.index);
+      if (real_log_odds(p) < 0.0) {
+        ratings[j] = EndpointRating{0.0f, false};
+        continue;
+      }
+      const double l = strength(kf.tracker, id, dist, p.views) * (p.believed ? share : p.shares);
+      ratings[j] = EndpointRating{static_cast<float>(l), p.views >= Rules::ray_detections};
     }
-    if (params_.rerate && !c.committed) l *= c.views;
-    if (c.voxel_logodds < params_.free_veto && c.views < params_.veto_views) l = 0.0;
-    if (params_.bound_voxel && c.in_voxel > 1) l /= c.in_voxel;
-    return static_cast<float>(l);
   }
 
- public:
-  /// Free-space evidence outweighs the point's views (see RobustModelParams::contra_min).
-  bool rejects(std::uint32_t views, std::uint32_t contradictions) const {
-    return params_.contra_min > 0 && contradictions >= params_.contra_min &&
-           contradictions >= params_.contra_ratio * views;
+  /// The contextual hook, after the scan: the evidence added, the keyframe's see-throughs, one EM
+  /// step, and every point's evidence put in or taken back accordingly.
+  template <class Key, class Tracker>
+  void settle_keyframe(const KeyframeView<Key, Tracker>& kf,
+                       const std::vector<EndpointRating>& ratings, OccupancyMap<Key>& map) {
+    if (!kf.has_ids) return;
+    for (std::size_t j = 0; j < kf.points.size(); ++j) {
+      if (kf.ids[j] == KeyframeUnion::kNoId || ratings[j].logodds == 0.0f) continue;
+      MapPointLedger::Point& p = ledger_.at(index_[j]);
+      p.added += ratings[j].logodds;
+      set_believed(p, true);
+    }
+    const RunningNormal& dist = kf.tracker.distribution();
+    if (dist.count() > 0)  // the margin needs a scale
+      tally_.add_keyframe(
+          kf.map.grid(), kf.origin, kf.points, params_.margin_scale * dist.mean(),
+          static_cast<std::uint32_t>(kf.index),
+          [&](std::size_t j) { return kf.ids[j] != KeyframeUnion::kNoId; },
+          [&](std::uint32_t slot) {
+            for (std::uint32_t i = tally_.at(slot).first_point; i != MapPointLedger::kNone;
+                 i = ledger_.at(i).next_in_voxel)
+              touch(i, kf.index);
+          });
+    // The points whose counts changed move to their new bins; then one EM step.
+    for (const std::uint32_t i : touched_) {
+      MapPointLedger::Point& p = ledger_.at(i);
+      if (p.bin != MapPointLedger::kNone) mixture_.erase(p.bin);
+      p.bin = mixture_.insert(counts(p));
+    }
+    touched_.clear();
+    mixture_.step();
+    mixture_.refresh();
+    const bool found = wrong_class_found();
+    ledger_.for_each([&](std::uint64_t id, MapPointLedger::Point& p) {
+      const bool real = !found || mixture_.bin_log_odds(p.bin) >= 0.0;
+      if (real == p.believed) return;
+      if (!real) {
+        take_back(p, map);
+        return;
+      }
+      const float l = static_cast<float>(strength(kf.tracker, id, dist, p.views) * p.shares);
+      if (p.has_key) map.update(Key::unpack(p.key), l);
+      p.added = l;
+      set_believed(p, true);
+    });
   }
-  /// 0 when the contradiction test is off (Mapper then walks no rays for it).
-  double contradiction_radius() const { return params_.contra_min > 0 ? params_.contra_radius : 0; }
-  /// Radius (m) to count an endpoint's independent support in (PointContext::support); 0: not
-  /// needed (support off, or the endpoint is not confirmed).
-  double support_radius(std::uint32_t views, const RunningNormal& dist) const {
-    const std::uint32_t from = params_.early_views > 0
-                                   ? std::min(params_.early_views, params_.min_views)
-                                   : params_.min_views;
-    if (params_.support_scale <= 0 || params_.min_support == 0 || views < from || dist.count() == 0)
-      return 0.0;
-    return params_.support_scale * dist.mean();
-  }
-  double contradiction_margin() const { return params_.contra_margin; }
 
  private:
+  // Detection j of the keyframe in the ledger; a new point gets its voxel and its independent
+  // support: the map points within margin_scale * mu (the see-through margin: one scale for
+  // "near") that other keyframes created, each of which counts the new point too.
+  template <class Key, class Tracker>
+  std::uint32_t observe(const KeyframeView<Key, Tracker>& kf, std::size_t j, bool& counted) {
+    bool fresh = false;
+    const auto keyframe = static_cast<std::uint32_t>(kf.index);
+    const std::uint32_t self = ledger_.observe(kf.ids[j], kf.points[j], keyframe, fresh, counted);
+    if (!fresh) return self;
+    MapPointLedger::Point& p = ledger_.at(self);
+    Key k;  // as the scan finds the endpoint's voxel (float)
+    p.has_key = kf.map.grid().point_to_key(detail::to_point3f(p.position), k);
+    if (p.has_key) {
+      p.key = k.pack();
+      p.voxel = tally_.slot(k);
+      p.next_in_voxel = tally_.at(p.voxel).first_point;
+      tally_.at(p.voxel).first_point = self;
+    }
+    const RunningNormal& dist = kf.tracker.distribution();
+    if (dist.count() == 0 || !kf.tracker.contains(kf.ids[j])) return self;
+    const double r = params_.margin_scale * dist.mean();
+    kf.tracker.radius(kf.tracker.position(kf.ids[j]), r * r, near_);
+    for (const auto i : near_) {
+      const std::uint32_t other = ledger_.index_of(kf.tracker.id_at(i));
+      if (other == MapPointLedger::kNone || other == self) continue;
+      MapPointLedger::Point& o = ledger_.at(other);
+      if (o.first == keyframe) continue;  // the same creator
+      ++o.support;
+      ++ledger_.at(self).support;
+      touch(other, kf.index);
+    }
+    return self;
+  }
+
+  // Point i's counts changed in keyframe `keyframe`: its bin is renewed at the keyframe's end.
+  void touch(std::uint32_t i, std::size_t keyframe) {
+    MapPointLedger::Point& p = ledger_.at(i);
+    const auto stamp = static_cast<std::uint32_t>(keyframe + 1);
+    if (p.touched == stamp) return;
+    p.touched = stamp;
+    touched_.push_back(i);
+  }
+
+  void set_believed(MapPointLedger::Point& p, bool believed) {
+    if (p.believed == believed) return;
+    p.believed = believed;
+    if (p.voxel != VoxelTally::kNone) tally_.at(p.voxel).believed += believed ? 1 : -1;
+  }
+
+  // A point no longer believed takes its evidence back. A voxel left without a believed point is
+  // not left occupied by what clamping kept of that evidence (or by an exact 0 where the point's
+  // evidence alone made it known): it is set just below the occupancy threshold.
+  template <class Key>
+  void take_back(MapPointLedger::Point& p, OccupancyMap<Key>& map) {
+    set_believed(p, false);
+    const float added = p.added;
+    p.added = 0.0f;
+    if (!p.has_key || added == 0.0f) return;
+    const Key k = Key::unpack(p.key);
+    const float v = map.update(k, -added);
+    if (map.is_occupied(v) && tally_.at(p.voxel).believed == 0)
+      map.set(k, std::nextafter(map.params().occupancy_threshold,
+                                -std::numeric_limits<float>::infinity()));
+  }
+
+  // Eq 13 for the point's s; from two detections on never below P_w (a point two keyframes agree
+  // on is not pushed to free); one detection: the paper's rating as it is.
+  template <class Tracker>
+  double strength(const Tracker& tracker, std::uint64_t id, const RunningNormal& dist,
+                  std::uint32_t views) const {
+    const double s =
+        tracker.contains(id) ? tracker.s(id) : std::numeric_limits<double>::quiet_NaN();
+    const double l = logodds(knn_.probability(s, dist));
+    return views >= 2 ? std::max(l, floor_) : l;
+  }
+
+  // in_voxel_[j]: this keyframe's rated endpoints in endpoint j's voxel.
+  template <class Key, class Tracker>
+  void count_per_voxel(const KeyframeView<Key, Tracker>& kf) {
+    const std::size_t n = kf.points.size();
+    keys_.assign(n, detail::FlatIndex::kEmpty);
+    in_voxel_.assign(n, 1);
+    index_.assign(n, MapPointLedger::kNone);
+    voxels_.clear();
+    voxel_count_.clear();
+    for (std::size_t j = 0; j < n; ++j) {
+      Key k;
+      if (kf.ids[j] == KeyframeUnion::kNoId ||
+          !kf.map.grid().point_to_key(detail::to_point3f(kf.points[j]), k))
+        continue;
+      keys_[j] = k.pack();
+      bool fresh = false;
+      const std::uint32_t v =
+          voxels_.find_or_insert(keys_[j], static_cast<std::uint32_t>(voxel_count_.size()), fresh);
+      if (fresh) voxel_count_.push_back(0);
+      ++voxel_count_[v];
+    }
+    for (std::size_t j = 0; j < n; ++j)
+      if (keys_[j] != detail::FlatIndex::kEmpty)
+        in_voxel_[j] = voxel_count_[voxels_.find(keys_[j])];
+  }
+
   RobustModelParams params_;
   KnnModel knn_;
   float hit_ = 0.0f;
   double floor_ = 0.0;
-  std::uint32_t ray_views_ = 1;
+  MapPointLedger ledger_;
+  VoxelTally tally_;
+  RealPointMixture mixture_;
+  // Per keyframe (kept for their memory).
+  std::vector<std::uint64_t> keys_;  // each endpoint's voxel (Key::pack(), kEmpty: none)
+  std::vector<std::uint32_t> in_voxel_, voxel_count_, near_, touched_;
+  std::vector<std::uint32_t> index_;  // each endpoint's ledger index (kNone: not rated by it)
+  detail::FlatIndex voxels_;
 };
+
+/// The library's robust model.
+using RobustModel = BasicRobustModel<>;
 
 }  // namespace knnocc

@@ -4,7 +4,7 @@
 //
 // Every model has
 //   float miss_logodds() const;      the update of a voxel a ray crosses (once per scan)
-// and is of one of two kinds:
+// and is of one of three kinds:
 //   - fixed (OctoMapModel, paper eq 4): static constexpr bool uses_map_cloud = false (or absent),
 //       float hit_logodds() const;   the update of a voxel holding endpoints (once per scan,
 //                                    occupied wins over free)
@@ -14,13 +14,11 @@
 //                                    over its endpoints, eq 15) and whether it casts a free ray
 //                                    (eq 14), from the endpoint's mean k-NN distance s (NaN when
 //                                    it has none) and the distribution of the map cloud's s
-//     or, instead of that, the contextual form (RobustModel)
-//       EndpointRating rate(const PointContext& point, const RunningNormal& distribution) const;
-//                                    the same from the endpoint's context
-//                                    (sensor/point_context.hpp: s, how many keyframes observed its
-//                                    map point, its voxel's log-odds so far, ...), which Mapper
-//                                    gathers only for it,
-//     and, so that Mapper can keep the map cloud's statistics without being told how:
+//   - contextual (RobustModel): uses_map_cloud = true and, instead of rate(), the hook of
+//       sensor/contextual_model.hpp (rate_keyframe, settle_keyframe): a stateful model that
+//       rates a whole keyframe and keeps its own per-map-point state;
+//   a rated or contextual model also names, so that Mapper can keep the map cloud's statistics
+//   without being told how:
 //       using tracker_type = ...;    the tracker Mapper keeps by default (knn/tracker_concept.hpp)
 //       TrackerParams tracker_params() const;   optional: how that tracker is constructed
 //     (a Mapper given a constructed tracker needs neither).
@@ -33,8 +31,8 @@
 
 #include "../stats/welford.hpp"
 #include "cloud_model.hpp"
+#include "contextual_model.hpp"
 #include "endpoint_rating.hpp"
-#include "point_context.hpp"
 
 namespace knnocc {
 namespace detail {
@@ -76,67 +74,23 @@ struct has_rate<
                                                   0.0, std::declval<const RunningNormal&>())),
                                               EndpointRating>>> : std::true_type {};
 
-template <class M, class = void>
-struct has_context_rate : std::false_type {};
-template <class M>
-struct has_context_rate<
-    M, std::enable_if_t<std::is_convertible_v<decltype(std::declval<const M&>().rate(
-                                                  std::declval<const PointContext&>(),
-                                                  std::declval<const RunningNormal&>())),
-                                              EndpointRating>>> : std::true_type {};
-
-// Optional for a contextual model: free-space evidence against map points, with
-//   bool rejects(std::uint32_t views, std::uint32_t contradictions) const;
-//   double contradiction_radius() const;  double contradiction_margin() const;
-// (insertion/map_point_ledger.hpp); a rejected point's earlier evidence is taken back. A radius
-// of 0 turns the test off.
-template <class M, class = void>
-struct has_rejects : std::false_type {};
-template <class M>
-struct has_rejects<M,
-                   std::void_t<decltype(bool(std::declval<const M&>().rejects(1u, 1u))),
-                               decltype(double(std::declval<const M&>().contradiction_radius())),
-                               decltype(double(std::declval<const M&>().contradiction_margin()))>>
-    : std::true_type {};
-
-// Optional for a contextual model: support at a second scale, with
-//   double support_radius(std::uint32_t views, const RunningNormal& dist) const;
-// (> 0: Mapper counts the other map points within that radius into PointContext::support).
-template <class M, class = void>
-struct has_support : std::false_type {};
-template <class M>
-struct has_support<M, std::void_t<decltype(double(std::declval<const M&>().support_radius(
-                          1u, std::declval<const RunningNormal&>())))>> : std::true_type {};
-
-// Optional for a contextual model: commitment beside committed structure, with
-//   bool wants_anchors(const PointContext& point) const;
-//   float beside_evidence(const PointContext& point, const RunningNormal& dist) const;
-// (wants_anchors true: Mapper counts the anchors around the endpoint into
-// PointContext::anchors, and an endpoint that adds evidence after that does not make its map
-// point an anchor; beside_evidence: what a map point held back earlier adds when an anchor
-// appears beside it, MapPointLedger::for_each_around).
-template <class M, class = void>
-struct has_anchors : std::false_type {};
-template <class M>
-struct has_anchors<M, std::void_t<decltype(bool(std::declval<const M&>().wants_anchors(
-                                      std::declval<const PointContext&>()))),
-                                  decltype(float(std::declval<const M&>().beside_evidence(
-                                      std::declval<const PointContext&>(),
-                                      std::declval<const RunningNormal&>())))>> : std::true_type {};
-
-/// Compiles only for a type that meets the sensor-model concept; the message names what is
-/// missing.
-template <class M>
+/// Compiles only for a type that meets the sensor-model concept with Mapper's Key and Tracker;
+/// the message names what is missing.
+template <class M, class Key, class Tracker>
 constexpr bool check_sensor_model() {
   static_assert(has_miss_logodds<M>::value,
                 "a sensor model needs `float miss_logodds() const` (sensor/sensor_model.hpp)");
   if constexpr (rates_cloud<M>::value) {
     check_cloud_model<M>();
   } else if constexpr (uses_map_cloud<M>::value) {
-    static_assert(has_rate<M>::value || has_context_rate<M>::value,
-                  "a sensor model with uses_map_cloud = true needs `EndpointRating rate(double s, "
-                  "const RunningNormal&) const` or `EndpointRating rate(const PointContext&, "
-                  "const RunningNormal&) const` (sensor/sensor_model.hpp)");
+    if constexpr (is_contextual_v<M, Key, Tracker>) {
+      check_contextual_model<M, Key, Tracker>();
+    } else {
+      static_assert(has_rate<M>::value,
+                    "a sensor model with uses_map_cloud = true needs `EndpointRating rate(double "
+                    "s, const RunningNormal&) const`, or the contextual hook rate_keyframe and "
+                    "settle_keyframe (sensor/sensor_model.hpp, sensor/contextual_model.hpp)");
+    }
   } else {
     static_assert(has_hit_logodds<M>::value,
                   "a sensor model without uses_map_cloud needs `float hit_logodds() const` "

@@ -1,0 +1,100 @@
+// robust_variants: the robust model's ablations (docs/robust_model.md), measured by
+// bench_robust_model --ablate. Each variant changes one of the rules RobustRules names
+// (sensor/robust_model.hpp) or one parameter; none of them is a switch of the library's model.
+
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <knnocc/eval/metrics.hpp>
+#include <knnocc/eval/reference.hpp>
+#include <knnocc/io/sequence.hpp>
+#include <knnocc/map/occupancy_map.hpp>
+#include <knnocc/mapper.hpp>
+#include <knnocc/sensor/robust_model.hpp>
+#include <knnocc/sim/tree_scene.hpp>
+
+namespace knnocc::bench {
+
+// The gap term on: keyframes between a point's first and latest detection that missed it.
+struct WithGaps : RobustRules {
+  static constexpr MixtureTerms terms{true};
+};
+// The mixture used even when its wrong class is not less supported than its real class.
+struct WithoutSupportCheck : RobustRules {
+  static constexpr bool support_check = false;
+};
+// Rays from the first or second detection of a believed point (the model: from the third).
+struct RaysFromOne : RobustRules {
+  static constexpr std::uint32_t ray_detections = 1;
+};
+struct RaysFromTwo : RobustRules {
+  static constexpr std::uint32_t ray_detections = 2;
+};
+// Without independent support (the mixture sees every point with none).
+struct WithoutSupport : RobustRules {
+  static constexpr bool support_check = false;  // nothing to check
+  static PointCounts counts(const MapPointLedger::Point& p, const VoxelTally& t) {
+    PointCounts k = RobustRules::counts(p, t);
+    k.u = 0;
+    return k;
+  }
+};
+// Without see-throughs (the mixture sees every point never seen through).
+struct WithoutSeeThrough : RobustRules {
+  static PointCounts counts(const MapPointLedger::Point& p, const VoxelTally& t) {
+    PointCounts k = RobustRules::counts(p, t);
+    k.c = 0;
+    return k;
+  }
+};
+
+/// A variant: its name and how it maps simulated keyframes (the map's Table 1 metrics and the
+/// median milliseconds per keyframe added to ms) and a real sequence at a resolution and crop (the
+/// map handed to use).
+struct RobustVariant {
+  std::string name;
+  std::function<eval::Metrics(const std::vector<sim::SimKeyframe>&, const eval::Reference&,
+                              double&)>
+      sim;
+  std::function<double(const io::Sequence&, double res, double crop,
+                       const std::function<void(const OccupancyMap<OcKey>&)>&)>
+      real;
+};
+
+/// The default model and, with ablate, its variants; map_sim and map_real are the bench's own
+/// runners, templated on the model.
+template <class MapSim, class MapReal>
+std::vector<RobustVariant> robust_variants(bool ablate, MapSim map_sim, MapReal map_real) {
+  std::vector<RobustVariant> v;
+  auto add = [&](std::string name, auto model) {
+    v.push_back(RobustVariant{
+        std::move(name),
+        [=](const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& ref, double& ms) {
+          return map_sim(kfs, ref, model, ms);
+        },
+        [=](const io::Sequence& seq, double res, double crop,
+            const std::function<void(const OccupancyMap<OcKey>&)>& use) {
+          return map_real(seq, res, crop, model, use);
+        }});
+  };
+  add("robust", RobustModel{});
+  if (!ablate) return v;
+  for (const double m : {1.0, 3.0}) {
+    RobustModelParams p;
+    p.margin_scale = m;
+    add(m == 1.0 ? "margin1" : "margin3", RobustModel(p));
+  }
+  add("+gaps", BasicRobustModel<WithGaps>{});
+  add("-check", BasicRobustModel<WithoutSupportCheck>{});
+  add("-support", BasicRobustModel<WithoutSupport>{});
+  add("-seethru", BasicRobustModel<WithoutSeeThrough>{});
+  add("rays1", BasicRobustModel<RaysFromOne>{});
+  add("rays2", BasicRobustModel<RaysFromTwo>{});
+  return v;
+}
+
+}  // namespace knnocc::bench

@@ -154,7 +154,8 @@ struct PointScore {
 
 // One real sequence with map-point ids: each model's map, the multi-view proxies against the
 // OctoMap model's map (and precision/recall against reference points when the set has them).
-void real_ids(const std::string& dir, double res, double crop, const std::vector<bench::RobustVariant>& vars) {
+void real_ids(const std::string& dir, double res, double crop,
+              const std::vector<bench::RobustVariant>& vars) {
   const io::Sequence seq = io::Sequence::open(dir);
   eval::MapPointViews views;
   std::vector<Point3d> w;

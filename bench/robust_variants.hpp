@@ -71,15 +71,14 @@ template <class MapSim, class MapReal>
 std::vector<RobustVariant> robust_variants(bool ablate, MapSim map_sim, MapReal map_real) {
   std::vector<RobustVariant> v;
   auto add = [&](std::string name, auto model) {
-    v.push_back(RobustVariant{
-        std::move(name),
-        [=](const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& ref, double& ms) {
-          return map_sim(kfs, ref, model, ms);
-        },
-        [=](const io::Sequence& seq, double res, double crop,
-            const std::function<void(const OccupancyMap<OcKey>&)>& use) {
-          return map_real(seq, res, crop, model, use);
-        }});
+    v.push_back(
+        RobustVariant{std::move(name),
+                      [=](const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& ref,
+                          double& ms) { return map_sim(kfs, ref, model, ms); },
+                      [=](const io::Sequence& seq, double res, double crop,
+                          const std::function<void(const OccupancyMap<OcKey>&)>& use) {
+                        return map_real(seq, res, crop, model, use);
+                      }});
   };
   add("robust", RobustModel{});
   if (!ablate) return v;

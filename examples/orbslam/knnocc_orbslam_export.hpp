@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // knnocc's keyframe exporter for ORB-SLAM2 and ORB-SLAM3: one header to add to an ORB-SLAM
 // build. It writes the sequence folder `knnocc map` reads, while SLAM runs:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // knnocc umbrella header: every public header but those of io/, eval/ and sim/ (they read and
 // write files and need Eigen: include those one by one). tests/include_layers checks that this

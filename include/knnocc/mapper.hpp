@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Mapper: one keyframe at a time into an occupancy map (paper Alg. 3, with Alg. 2 before it when
 // the sensor model needs the map point cloud). Its parts are policies, each a concept documented

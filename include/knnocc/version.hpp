@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // knnocc version information.
 //
 // The top-level CMakeLists.txt parses the three KNNOCC_VERSION_* macros below

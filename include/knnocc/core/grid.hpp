@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Grid: resolution plus coordinate <-> key conversion, with OctoMap's exact arithmetic.
 //

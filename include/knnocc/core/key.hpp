@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Voxel keys: one unsigned index per axis at the finest level of a tree of depth Bits.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Probability <-> log-odds (paper eq 2), with OctoMap's rounding: computed in double, stored as
 // float, so logodds(0.7) == 0.847297847f exactly as in liboctomap.

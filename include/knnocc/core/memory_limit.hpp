@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // MemoryLimitError: what a map reports when a write would take it past its memory limit
 // (OccupancyMap::set_memory_limit). A std::bad_alloc, so code that already handles allocation

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Point3f / Point3d: knnocc's own plain points (aggregates, no alignment demands).
 // Ray casting works in float, exactly like OctoMap's point3d, so points of any type are

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // PointEvidence: what a SLAM system knows about one map point beyond its position, carried per
 // point of a keyframe (PLY vertex properties `found`, `visible`, `observations`, io/ply.hpp;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // One trait gives knnocc the coordinates of any point type.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Rgb: an 8-bit colour, as point files (PLY red/green/blue, PCD rgb/rgba) and OctoMap's
 // ColorOcTree store it.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The authors' counting (Miao et al., Sensors 22(1):139, 2022): a map against a reference map,
 // cell by cell, for every finest-level cell known in both, with a tolerance of one voxel that

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Held-out evaluation: map quality on real keyframes without ground truth and without any rule of
 // the model under test. The keyframes are split into F interleaved folds (fold f: the keyframes

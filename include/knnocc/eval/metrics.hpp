@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Map-versus-reference metrics of the paper's Table 1 (section 4.2), on finest-level voxels
 // ("nodes"), plus precision/recall-style figures and free voxels inside the solids.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Map quality without ground truth, for real sequences whose points carry map-point ids (ORB-SLAM
 // map points): a point seen by several keyframes is almost surely real structure, so the voxels

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // How a sequence's map points are observed: the statistics the simulator is calibrated on
 // (docs/evaluation.md, "Simulator calibration"), for any sequence whose points carry map-point

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The OctoMap model at its best, as the authors' 2022 paper compares against it: the hit / miss /
 // occupancy-threshold setting with the best F1 of their counting (eval/confusion.hpp) against a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Reference: the ground-truth shapes of a scene, as in the paper's experiment (section 4.1): the
 // foliage an ellipsoid, the pot a cuboid, and the ground plane. Solids are axis-aligned.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A reference given as points, e.g. the vertices of a room model (../shared/data/
 // icl_living_room_traj2n/reference.ply): voxelised for the authors' counting

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // LayeredScanInserter: the scan integrator of a cloud-rated sensor model (sensor/cloud_model.hpp,
 // Knn2022Model): one keyframe whose free space comes in two layers (sensor/layered_rating.hpp).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ScanInserter: OctoMap's insertPointCloud(points, origin, max_range, discretize) on an
 // OccupancyMap, as insert_point_cloud(origin, points, max_range, discretize), with the same map as

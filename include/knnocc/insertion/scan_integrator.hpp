@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The scan-integrator concept: what Mapper (mapper.hpp) asks of the part that applies one scan's
 // updates to the map (its Integrator; ScanInserter by default):

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ScanStats: what one scan's insertion did (ScanInserter, or any scan integrator:
 // insertion/scan_integrator.hpp).

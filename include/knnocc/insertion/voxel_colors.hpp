@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // VoxelColors: the colour of each voxel, as the mean of the colours of the points that hit it.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // AtomicFile: how every knnocc output is written (failures throw io::Error naming the target).
 // CommitGroup: several outputs committed as a set; StagingDir: a folder output built aside.

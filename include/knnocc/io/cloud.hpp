@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The in-memory point cloud every reader in knnocc::io returns.
 

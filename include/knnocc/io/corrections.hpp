@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A SLAM run's pose corrections: a folder of snapshots after_N.txt, each the trajectory of
 // keyframes 0..N (the format of poses.txt, one line per keyframe in keyframe order) as the SLAM

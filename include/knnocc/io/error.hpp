@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // knnocc::io::Error: the one exception type the IO layer throws.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // KITTI odometry data: velodyne scans (.bin: float32 x y z reflectance per point, little-endian,
 // sensor frame) and the Velodyne-to-camera transform "Tr" of calib.txt. The poses files

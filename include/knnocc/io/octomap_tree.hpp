@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // OctoMap's tree files, read into and written from an OccupancyMap<OcKey>, without liboctomap.
 //

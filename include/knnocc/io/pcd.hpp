@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // PCL's PCD point clouds (v0.7 and the older v0.6/v0.5 headers): read_pcd() and write_pcd().
 //

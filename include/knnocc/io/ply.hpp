@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // PLY point clouds: read_ply() and write_ply().
 //

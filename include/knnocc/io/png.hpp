@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A tiny self-contained PNG writer (no zlib): 8-bit RGB, no filtering, the image data in
 // "stored" (uncompressed) deflate blocks, with the CRC-32 of every chunk and the Adler-32 of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // read_points(): load a point file, choosing the reader by extension (case-insensitive).
 //   .ply                -> read_ply

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ROS map_server maps (what map_server, map_saver and Nav2's map_server load): NAME.yaml plus
 // the image it names, here NAME.pgm (binary greyscale "P5").

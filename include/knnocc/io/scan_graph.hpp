@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // OctoMap's ScanGraph files (.graph): scans in the sensor frame with their sensor-to-world poses,
 // plus pose-graph edges; what OctoMap's graph2tree turns into a .bt. Little-endian binary:

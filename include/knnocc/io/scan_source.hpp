@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ScanSource: every input `knnocc map` takes, as a list of scans (a cloud in the sensor frame
 // plus its sensor-to-world pose):

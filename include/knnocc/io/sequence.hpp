@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A sequence folder: poses.txt (one sensor-to-world pose per line, TUM or KITTI format) plus a
 // cloud folder, where the i-th cloud in name order belongs to the i-th pose line:

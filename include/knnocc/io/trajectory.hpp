@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Sensor poses: the TUM trajectory format "stamp tx ty tz qx qy qz qw", KITTI's 3x4 matrices
 // (12 numbers per line, row-major [R | t]), and moving clouds into the world frame with them.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Map voxels as PLY for CloudCompare, MeshLab and friends: one point per voxel centre, or one
 // cube (8 corners, 6 quad faces) per voxel. Binary little-endian (or ascii), atomic.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The plain voxel-list format used to compare maps across implementations: one voxel per line,
 // "x y z logodds" printed as "%.6f %.6f %.6f %.6f", sorted by x, then y, then z, so two maps can

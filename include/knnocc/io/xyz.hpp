@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ASCII "x y z" point files (.xyz, and OctoMap's .dat scan files, which are the same thing).
 //

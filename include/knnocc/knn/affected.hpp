@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Affected-point policies: which existing map points need their k-NN recomputed after a change
 // (paper section 3.2, "affected points"). A policy's collect(tracker, marks) reads the change and

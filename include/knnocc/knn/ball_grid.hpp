@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // BallGrid: which k-NN balls may contain a point.
 //

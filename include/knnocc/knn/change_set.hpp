@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ChangeSet: how the map point cloud changed between two keyframes (paper section 3.2): new
 // points (added), disappeared points (removed) and points whose position changed (moved, e.g.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The one place that knows nanoflann's version differences (Debian 12's 1.4.3, which reports
 // itself as 1.4.2 = 0x142, and 1.5+):

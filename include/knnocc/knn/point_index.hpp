@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // PointIndex: the map point cloud with stable 64-bit ids, searched with nanoflann.
 //

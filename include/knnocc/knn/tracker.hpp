@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // KnnTracker: s_p for every map point and the normal distribution of the valid ones, kept up to
 // date as the map point cloud changes (paper section 3.2, eq 5-12, Alg. 2).

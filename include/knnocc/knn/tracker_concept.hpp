@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The tracker concept: what Mapper (mapper.hpp) asks of the tracker that keeps the map point
 // cloud's k-NN statistics for a rated sensor model (sensor/sensor_model.hpp):

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The plain types of the k-NN tracker (knn/tracker.hpp): its parameters and what one update did.
 // They need no KD-tree, so the sensor models and the mapper can name them without nanoflann.

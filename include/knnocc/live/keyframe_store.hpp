@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The live mapper's keyframes, in insertion order: id, pose, sensor-frame points (float, 12
 // bytes each), map-point ids (k-NN model only, 8 bytes each) and the box of map bricks its rays

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // LiveMapper: an occupancy map that follows a SLAM system's corrections exactly (the paper's
 // future work, section 5: update the map when loop closure re-poses the keyframes).

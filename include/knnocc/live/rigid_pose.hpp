@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Keyframe poses for the live mapper: RigidPose (sensor to world, rotation matrix + translation)
 // and pose_traits, the customisation point that moves a sensor-frame point into the world.

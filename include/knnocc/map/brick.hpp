@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Brick geometry: the map stores voxels in 8x8x8 bricks, hashed by brick coordinate.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A 2D occupancy grid for navigation (what ROS map_server and Nav2 load), projected from a
 // height band of a 3D map.

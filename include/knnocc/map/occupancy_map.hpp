@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // OccupancyMap: sparse hashed voxel storage with OctoMap's log-odds update and clamping.
 //

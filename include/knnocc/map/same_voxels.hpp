@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // same_voxels: whether two maps hold the same known voxels with bit-identical log-odds (what
 // "the same map" means for the live mapper's invariant and for the OctoMap-model equality with

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ValuePool: the 512-float value arrays of a map's bricks, carved from a few large slabs.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // cast_ray: the first occupied voxel along a direction (OctoMap's castRay semantics).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Exact 3D DDA (Amanatides & Woo) that yields exactly the keys of OctoMap's computeRayKeys:
 //   - origin voxel included, end voxel never included, nothing when both share a voxel;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The cloud-rated sensor-model concept: a model that rates each keyframe from that keyframe's own
 // cloud alone (Knn2022Model: the mean distance of a point to its k nearest neighbours in the same

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The contextual-model hook: how Mapper (mapper.hpp) hands a whole keyframe to a stateful sensor
 // model that rates its points from more than their own mean k-NN distance (RobustModel: the

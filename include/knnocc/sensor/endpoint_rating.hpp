@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // EndpointRating: what a per-endpoint sensor model (KnnModel) says about one endpoint of a scan;
 // ScanInserter::insert_rated applies a scan of them.

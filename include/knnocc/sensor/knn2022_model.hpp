@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Knn2022Model: the authors' follow-up model (Miao, Hunter, Georgilas, "An Occupancy Mapping
 // Method Based on K-Nearest Neighbours", Sensors 22(1):139, 2022), a cloud-rated sensor model

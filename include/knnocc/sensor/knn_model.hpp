@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // KnnModel: the k-NN inverse sensor model (paper section 3.3, eq 13-15).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // LayeredRating: what a cloud-rated sensor model (sensor/cloud_model.hpp, e.g. Knn2022Model) says
 // about one point of a keyframe; LayeredScanInserter::insert_layered applies a keyframe of them.

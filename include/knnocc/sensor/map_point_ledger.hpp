@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // MapPointLedger: what RobustModel (sensor/robust_model.hpp) remembers per map-point id: where
 // the point is (its first world position, its voxel and that voxel's slot in the model's

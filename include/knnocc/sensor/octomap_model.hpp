@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // OctoMapModel: OctoMap's inverse sensor model (paper eq 4). An endpoint's voxel gets l_occ,
 // every voxel a ray crosses gets l_free; each voxel at most once per scan, occupied first.

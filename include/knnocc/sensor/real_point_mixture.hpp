@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // RealPointMixture: whether a map point is real structure or a wrong match, from counts the
 // keyframes give, with what real structure and wrong matches look like estimated from the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // RobustModel: an inverse sensor model for sparse visual-SLAM keyframes whose points carry
 // map-point ids (ORB-SLAM map points), for wrong matches that cluster and that the SLAM system

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The sensor-model concept: what Mapper (mapper.hpp) asks of its Model, the inverse sensor model
 // that turns a keyframe's endpoints into log-odds updates.

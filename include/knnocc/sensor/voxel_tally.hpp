@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // VoxelTally: what RobustModel (sensor/robust_model.hpp) counts per voxel: how many keyframes saw
 // through it and, for a voxel holding map points, how many of them are believed real.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Odometry drift and its corrections, for simulating what a SLAM system reports while mapping:
 //   the tracking estimate of keyframe i (what poses.txt holds when keyframes are written as they

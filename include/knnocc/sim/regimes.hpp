@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Named outlier regimes of the tree scene (sim/tree_scene.hpp), run by `knnocc demo` and
 // bench/bench_robust_model.cpp:

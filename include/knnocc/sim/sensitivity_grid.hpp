@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The sensitivity grid of the tree scene (sim/tree_scene.hpp): how wrong stereo matches look,
 // swept past any one regime, so that no model can be tuned to a simulator parameter unseen:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // TreeScene: a simulation of the paper's experiment (section 4.1): a stereo camera circling a
 // potted tree at 3.5 m, visual-SLAM style sparse feature points with persistent map-point ids.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // RunningNormal: the normal distribution of the s values (paper eq 5), kept up to date with
 // Welford's corrected sums of squares when values are added (eq 6-8) AND erased (eq 9-11);

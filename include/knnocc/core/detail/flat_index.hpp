@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // FlatIndex: an open-addressing hash table from a 64-bit key to a 32-bit slot number.
 //

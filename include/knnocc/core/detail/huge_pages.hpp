@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Large blocks of memory that a writer fills densely (the map's value slabs, a scan's ray
 // buffers), mapped 2 MB at a time where the system allows it.

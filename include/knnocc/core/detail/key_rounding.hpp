@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // KeyRounding: Grid::point_to_key without std::floor, for per-point loops.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Which vector code paths this build has, and whether the CPU can run them: KNNOCC_AVX2_LANES
 // (x86-64 with GCC or clang, unless KNNOCC_NO_SIMD is defined), and cpu_has_avx2() and

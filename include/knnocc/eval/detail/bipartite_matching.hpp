@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Maximum bipartite matching (Hopcroft-Karp) for the one-to-one counting of eval/confusion.hpp.
 // augment(allowed) grows the current matching to a maximum one among the edges whose right vertex

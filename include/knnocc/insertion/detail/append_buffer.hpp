@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // AppendBuffer: a growable array of trivially copyable elements for per-point loops.
 //

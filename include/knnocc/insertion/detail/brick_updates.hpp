@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Phase 3 of a scan (ScanInserter): apply. The touched bricks with their hit and miss masks (the
 // threads' scratches OR-ed) are taken in groups whose concatenation is z, y, x brick order,

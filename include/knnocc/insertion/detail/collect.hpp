@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Phase 1 of a scan (ScanInserter): collect. OctoMap's computeUpdate, point by point: the
 // max-range rule, the ray's end point and end voxel, the endpoint's key, and the key box of the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Phase 2 of a scan (ScanInserter) starts with a choice: walk the rays into a dense scratch of the
 // scan's box (a ScanBitmap per thread: fast, but its size follows the box) or into hashed per-brick

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The hashed scratch of a scan (ScanInserter, phase 2, when the dense box does not fit): one
 // thread's touched bricks, each with a miss mask, found through a hash of brick coordinates; the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // HitCodes: a chunked scan's hits as 32-bit codes in brick-row order, in place of a hit bitmap of
 // the scan's box when the scan has few points for its box (the one-thread apply reads them).

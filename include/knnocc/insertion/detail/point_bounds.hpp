@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // finite_bounds: the coordinate bounds of a block of Point3f, written so that the compiler
 // vectorises it (ScanInserter's bounds pass over a large scan, before its chunks are walked).

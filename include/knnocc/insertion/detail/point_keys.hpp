@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // point_keys8: KeyRounding::point_to_key for eight contiguous Point3f at once (AVX2), the key
 // rounding of ScanInserter's chunked collect.

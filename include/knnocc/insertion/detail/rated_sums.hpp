@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Eq 15's occupied term: a voxel holding endpoints of a rated scan (ScanInserter::insert_rated,
 // e.g. the k-NN model) receives, once per scan, the sum of its endpoints' log-odds,

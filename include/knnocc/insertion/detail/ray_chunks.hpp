@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The rays of a collected scan (every thread's ScanPart) handed out in chunks, to whichever thread
 // asks next (ScanInserter, phase 2): small chunks balance the threads, since rays differ in length.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ScanBitmap: one bit (or one byte) per voxel of a brick-aligned box of keys, the per-scan
 // scratch of ScanInserter when a scan's box is small enough (see plan_dense_box, dense_box.hpp).

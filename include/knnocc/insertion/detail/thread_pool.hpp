@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ThreadPool: a fixed set of threads running one job at a time (ScanInserter's --threads).
 //

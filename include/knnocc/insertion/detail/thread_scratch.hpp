@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ThreadScratch: what one of ScanInserter's threads keeps between scans, so that a warmed-up
 // inserter allocates nothing per scan: its share of the collected points (phase 1), its dense

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // How ScanInserter shares a pass between its threads: a Team runs one job on every thread (the
 // calling thread is thread 0; the others come from a ThreadPool made on the first multithreaded

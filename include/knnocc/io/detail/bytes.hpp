@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Internal: loading and storing fixed-size binary values in a given byte order (memcpy only, so
 // unaligned input is fine and there is no type punning).

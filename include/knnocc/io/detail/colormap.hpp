@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Internal: the height colour ramp of voxel exports and map pictures (blue - cyan - green -
 // yellow - red, like the "jet" ramps of octovis and CloudCompare).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Internal helpers of the IO layer (not public API): whole-file reads, atomic writes, line and
 // number scanning, fast number formatting. Every OS or parse failure becomes an io::Error.

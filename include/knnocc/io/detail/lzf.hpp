@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Internal: the LZF compression format (Marc Lehmann's liblzf) used by PCD "binary_compressed".
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Internals of octomap_tree.hpp: the text header of OctoMap's .bt/.ot files and a validating
 // walk over their node streams (see ../shared/docs/octomap-facts.md for the layouts).

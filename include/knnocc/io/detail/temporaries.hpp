@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The temporary files (and staging folders) knnocc is writing right now, so a SIGINT/SIGTERM
 // handler can remove them before the process dies (io::remove_temporaries_on_signal()).

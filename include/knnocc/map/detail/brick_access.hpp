@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The bricks of an OccupancyMap for the parts that write or read whole bricks at once: the scan
 // apply (insertion/detail/brick_updates.hpp), the .bt/.ot reader and writer

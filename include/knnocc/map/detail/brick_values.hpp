@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // OccupancyMap::update_brick's value updates: update_values_scalar voxel by voxel, and
 // update_values_avx2 eight voxels at a time (AVX2) with the same results (a test compares them).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The dense walks behind one dispatcher. A scan's rays share their origin (a RayFan); they are set
 // up a RayBlock at a time and walked on a WalkPath: scalar, four AVX2 lanes, or the two AVX-512

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // LinearRay: walk_ray()'s state with a voxel index in place of a key, for walks into a dense box
 // of voxels (ScanInserter's per-scan scratch). A step along axis a adds stride[a] (+-1, +-nx or

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // RayBlock: up to 256 LinearRays set up field by field (a structure of arrays: the AVX-512 walk
 // loads one field of eight rays in one instruction), and BlockRays, a block read as a ray stream.

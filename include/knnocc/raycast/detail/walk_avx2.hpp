@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // AVX2 code of the dense walks (x86-64, checked at run time): eight rays set up at once, and four
 // rays walked at once, one per 64-bit lane, with walk_ray()'s comparisons in branch-free form (the

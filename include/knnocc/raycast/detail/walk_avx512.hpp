@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // AVX-512F code of the dense walks (x86-64, checked at run time): eight lanes of a 512-bit
 // register, walk_ray()'s comparisons as mask registers (compare into a mask, add under the mask),

@@ -1,0 +1,15 @@
+# Fails when a public header does not open with the project's SPDX licence line (LICENSE).
+#   -DROOT=<project root>
+file(GLOB_RECURSE _headers "${ROOT}/include/*.hpp")
+set(_missing "")
+foreach(_h IN LISTS _headers)
+  file(STRINGS "${_h}" _first LIMIT_COUNT 1)
+  if(NOT _first STREQUAL "// SPDX-License-Identifier: BSD-3-Clause")
+    string(APPEND _missing "  ${_h}\n")
+  endif()
+endforeach()
+if(_missing)
+  message(FATAL_ERROR "these headers need '// SPDX-License-Identifier: BSD-3-Clause' as their first line:\n${_missing}")
+endif()
+list(LENGTH _headers _n)
+message(STATUS "${_n} headers carry the SPDX line")

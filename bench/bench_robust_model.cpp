@@ -6,13 +6,14 @@
 // precision and recall against its room model's vertices, eval/reference_points.hpp) and the TUM
 // depth clouds (tum_fr2_pioneer_slam2, 0.05 m: occupied voxels as % of the OctoMap model's). The
 // 2022 model gets whole clouds (it cuts at its own 4 m) and a first pass for mu and sigma.
-// --ablate also maps each regime with the robust model's parts switched off one at a time.
+// --ablate also maps each regime with the robust model's variants (bench/robust_variants.hpp:
+// other margins, a term of the mixture added or left out, rays from another detection).
 //
 //   build/bin/bench_robust_model [--seeds N] [--ablate] [--match TEXT] [--data DIR]
 //   (--match: the ablation's variants whose name contains TEXT only)
 //   [--repeat N] [--cluster N]: the repeated regimes' patches re-observed by the next N keyframes
-//   instead of 4, the clustered regimes' patches N features instead of 6: how the robust model's
-//   rules hold on wrong matches unlike those its thresholds were measured on
+//   instead of 4, the clustered regimes' patches N features instead of 6: the models on wrong
+//   matches unlike the named regimes' (the sensitivity grid below covers them all)
 //
 //   build/bin/bench_robust_model --grid [--seeds N] [--patch 1,2] [--lifetime 0,4] [--prob 1]
 //     [--no-mixed] [--no-tune] [--png-dir DIR]
@@ -218,7 +219,7 @@ void real_ids(const std::string& dir, double res, double crop,
 }
 
 // Dense depth clouds (TUM fr2/pioneer_slam2, 0.05 m, no ids): each model's occupied voxels as a
-// share of the OctoMap model's (the goal: >= 95 % for a model that keeps dense surfaces).
+// share of the OctoMap model's (goal: >= 95 % for a model that keeps dense surfaces).
 void real_dense(const std::string& dir) {
   const io::Sequence seq = io::Sequence::open(dir);
   std::printf(
@@ -318,9 +319,9 @@ int main(int argc, char** argv) {
       ablate,
       [](const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& ref, const auto& model,
          double& ms) { return run_sim(kfs, ref, model, ms); },
-      [](const io::Sequence& seq, const auto& model,
+      [](const io::Sequence& seq, double res, double crop, const auto& model,
          const std::function<void(const OccupancyMap<OcKey>&)>& use) {
-        return run_sequence(seq, 0.1, 4.0, model, use);
+        return run_sequence(seq, res, crop, model, use);
       });
   if (!match.empty())  // the default and the variants whose name contains the text
     vars.erase(std::remove_if(vars.begin() + 1, vars.end(),

@@ -4,7 +4,7 @@
 // Prints known voxels, bytes and bytes per known voxel for both, and the ratio; for knnocc also
 // the insertion time and the process's peak resident memory. knnocc's figure is
 // OccupancyMap::memory_usage(); OctoMap's is OcTree::memoryUsage() (its own estimate of nodes and
-// child-pointer arrays). octomap=0 skips liboctomap (the 20,000-point probe: about 118 M
+// child-pointer arrays). octomap=0 skips liboctomap (the 20,000-point probe: about 118 M
 // known voxels, some 11 GB for liboctomap at the 95 bytes per known voxel it takes at 200 points,
 // bench/NOTES.md). Bonxai: bench_bonxai_memory (built with -DKNNOCC_BONXAI_DIR).
 

@@ -199,7 +199,7 @@ inline int run_grid(const GridOptions& opt) {
   }
 
   // Goals and the "no cliff" figure, per model.
-  std::printf("\nsummary (report seeds; goals of issue 33 in brackets)\n");
+  std::printf("\nsummary (report seeds; the quality goals in brackets)\n");
   for (std::size_t m = 1; m < nm; ++m) {
     if (!used(m)) continue;
     std::size_t le10 = 0, le25 = 0, shell97 = 0, above_knn = 0, below_oracle = 0, grid_cells = 0;

@@ -44,16 +44,20 @@ std::string problem_of(const io::Cloud& cloud, double res) {
 
 }  // namespace
 
-TEST_CASE("map_run.crop_cloud keeps ids and colours with their points") {
+TEST_CASE("map_run.crop_cloud keeps ids, colours and SLAM counters with their points") {
   io::Cloud c;
   c.points = {{1, 0, 0}, {5, 0, 0}, {0, 2, 0}, {0, 0, 9}};
   c.ids = {10, 11, 12, 13};
   c.colors = {{1, 1, 1}, {2, 2, 2}, {3, 3, 3}, {4, 4, 4}};
+  c.evidence = {{1, 2, 3}, {4, 5, 6}, {7, 8, 9}, {10, 11, 12}};
   cli::crop_cloud(c, 3.0);
   REQUIRE(c.points.size() == 2);
   CHECK(c.points[1].y == 2.0f);
   CHECK(c.ids == std::vector<std::uint64_t>{10, 12});
   CHECK(c.colors == std::vector<Rgb>{{1, 1, 1}, {3, 3, 3}});
+  REQUIRE(c.evidence.size() == 2);
+  CHECK(c.evidence[1].found == 7);
+  CHECK(c.evidence[1].observations == 9);
   cli::crop_cloud(c, -1.0);  // no crop
   CHECK(c.points.size() == 2);
 }

@@ -112,6 +112,36 @@ TEST_CASE("io.ply binary round trip") {
   }
 }
 
+TEST_CASE("io.ply SLAM counters written back with ids and colours, binary and ascii") {
+  ScratchDir dir("ply_counters");
+  io::Cloud cloud;
+  cloud.points = sample_points();
+  for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+    const auto n = static_cast<std::uint32_t>(i);
+    cloud.ids.push_back(i + 5);
+    cloud.colors.push_back({static_cast<std::uint8_t>(i), 7, 9});
+    cloud.evidence.push_back({n, n + 3, i % 2 ? 0xFFFFFFFFu : n / 2});
+  }
+  for (const bool binary : {true, false}) {
+    CAPTURE(binary);
+    const std::string p = dir.file(binary ? "c.ply" : "c_ascii.ply");
+    io::write_ply_cloud(p, cloud, binary);
+    const io::Cloud c = io::read_ply(p);
+    REQUIRE(c.evidence.size() == cloud.points.size());
+    for (std::size_t i = 0; i < c.evidence.size(); ++i) {
+      CHECK(c.evidence[i].found == cloud.evidence[i].found);
+      CHECK(c.evidence[i].visible == cloud.evidence[i].visible);
+      CHECK(c.evidence[i].observations == cloud.evidence[i].observations);
+    }
+    CHECK(c.ids == cloud.ids);
+    CHECK(c.colors == cloud.colors);
+  }
+  io::Cloud short_counters = cloud;
+  short_counters.evidence.pop_back();
+  CHECK(contains(error_of([&] { io::write_ply_cloud(dir.file("s.ply"), short_counters); }),
+                 "SLAM counters for"));
+}
+
 TEST_CASE("io.ply colours: uchar red green blue read and written, other colour types skipped") {
   ScratchDir dir("ply_colours");
   io::Cloud cloud;

@@ -70,8 +70,8 @@ std::string top_level_help() {
   }
   return out +
          "\nmodels (knnocc map --model NAME): octomap (OctoMap's hit/miss model, the default), "
-         "knn (the\npaper's k-NN model, eq 13-15), robust (ours, for visual-SLAM keyframes with "
-         "map-point ids)\n";
+         "knn (the\npaper's k-NN model, eq 13-15), knn2022 (the authors' 2022 model, a "
+         "baseline), robust (ours,\nfor visual-SLAM keyframes with map-point ids)\n";
 }
 
 std::string cli_markdown() {

@@ -24,8 +24,8 @@
 
 namespace knnocc::cli {
 
-/// The keyframes of a sequence whose clouds carry map-point ids, in the world frame, points
-/// farther than crop (> 0) from their sensor dropped.
+/// The keyframes of a sequence whose clouds carry map-point ids (and the SLAM counters, when
+/// they do), in the world frame, points farther than crop (> 0) from their sensor dropped.
 inline std::vector<eval::IdKeyframe> read_id_keyframes(const std::string& path, double crop) {
   const io::Sequence seq = io::Sequence::open(path);
   std::vector<eval::IdKeyframe> out(seq.size());
@@ -39,7 +39,7 @@ inline std::vector<eval::IdKeyframe> read_id_keyframes(const std::string& path, 
     } catch (const std::invalid_argument& e) {
       throw io::Error(seq.cloud_path(i), e.what());
     }
-    io::keyframe_to_world(seq.pose(i), cloud, crop, out[i].points, out[i].ids);
+    io::keyframe_to_world(seq.pose(i), cloud, crop, out[i].points, out[i].ids, &out[i].evidence);
     const Eigen::Vector3d& t = seq.pose(i).t;
     out[i].origin = {t.x(), t.y(), t.z()};
   }
@@ -57,7 +57,7 @@ OccupancyMap<OcKey> map_keyframes(const std::vector<eval::IdKeyframe>& keyframes
   for (const std::size_t i : train) {
     const eval::IdKeyframe& kf = keyframes[i];
     if constexpr (Mapper<Model>::uses_map_cloud) {
-      mapper.insert_keyframe(kf.origin, kf.points, kf.ids);
+      mapper.insert_keyframe(kf.origin, kf.points, kf.ids, kf.evidence);
     } else {
       f.clear();
       for (const Point3d& p : kf.points) f.push_back(knnocc::detail::to_point3f(p));

@@ -9,7 +9,8 @@
 //                                     ones skipped) in the camera frame, binary PLY: float x y z,
 //                                     uint id (MapPoint::mnId), and the point's evidence then:
 //                                     uint found (GetFound), visible (found / GetFoundRatio),
-//                                     observations (Observations: keyframes that see it)
+//                                     observations (GetObservations().size(): keyframes that see it;
+//                                     Observations() counts a stereo one twice)
 //   DIR/corrections/after_NNNNNN.txt  after each loop closure or global bundle adjustment (ORB-SLAM
 //                                     raises Map::GetLastBigChangeIdx for both), and at finish():
 //                                     the poses of keyframes 0..NNNNNN then, for `--corrections`
@@ -209,7 +210,7 @@ class KeyframeExporter {
       detail::store_le(body, static_cast<std::uint32_t>(mp->mnId));
       detail::store_le(body, static_cast<std::uint32_t>(std::max(found, 0)));
       detail::store_le(body, static_cast<std::uint32_t>(std::max(visible, 0L)));
-      detail::store_le(body, static_cast<std::uint32_t>(std::max(mp->Observations(), 0)));
+      detail::store_le(body, static_cast<std::uint32_t>(mp->GetObservations().size()));
       ++n;
     }
     const std::string header =

@@ -6,9 +6,10 @@
 //
 //   Model       the inverse sensor model (sensor/sensor_model.hpp): OctoMapModel (eq 4, fixed
 //               hit and miss log-odds), KnnModel (eq 13-15, every endpoint rated by its k-NN
-//               statistics) or a contextual model such as RobustModel (a whole keyframe rated
+//               statistics), a contextual model such as RobustModel (a whole keyframe rated
 //               through the hook of sensor/contextual_model.hpp, by a model that keeps its own
-//               per-map-point state)
+//               per-map-point state) or a cloud-rated one such as Knn2022Model (each keyframe
+//               rated from its own cloud, sensor/cloud_model.hpp)
 //   Key         the map's key type (OcKey: OctoMap's 16-bit keys; WideKey for larger areas)
 //   Tracker     the map point cloud's k-NN statistics (knn/tracker_concept.hpp), kept only for a
 //               rated model; by default the model's tracker_type (KnnTracker for KnnModel)
@@ -16,11 +17,10 @@
 //               ScanInserter (exact DDA, occupied wins, one update per voxel per scan), or
 //               LayeredScanInserter for a cloud-rated model
 //
-// Mapper<OctoMapModel>, Mapper<KnnModel> and Mapper<RobustModel> differ in one type and take the
-// same keyframes. The
-// model, the tracker and the map may be passed constructed (e.g. KnnTracker<PaperAnnulus> with its
-// own dr and s_max, or a map read from a file to continue it); examples/custom_policies.cpp
-// writes its own sensor model and tracker.
+// Mapper<OctoMapModel>, Mapper<KnnModel>, Mapper<Knn2022Model> and Mapper<RobustModel> differ in
+// one type and take the same keyframes. The model, the tracker and the map may be passed
+// constructed (e.g. KnnTracker<PaperAnnulus> with its own dr and s_max, or a map read from a file
+// to continue it); examples/custom_policies.cpp writes its own sensor model and tracker.
 //
 // One keyframe (insert_keyframe): its points in the world frame, the sensor position, and the
 // map-point ids of the points when the source has them (ORB-SLAM map points). The map point cloud
@@ -38,7 +38,7 @@
 //                               model's rate_keyframe instead of eq 13-14 per endpoint;
 //                               endpoints it rates {0, no ray} stay out of the scan; then its
 //                               settle_keyframe.
-// max_range keeps OctoMap's meaning for both models: a point farther than max_range from the
+// max_range keeps OctoMap's meaning for every model: a point farther than max_range from the
 // sensor marks nothing occupied, casts its ray truncated at max_range, and (k-NN model) stays out
 // of the map point cloud. Points with a NaN/Inf coordinate or outside the key range are skipped
 // and counted (ScanStats) and stay out of the map cloud too.

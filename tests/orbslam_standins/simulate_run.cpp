@@ -110,7 +110,7 @@ struct Run {
         continue;
       if (!points[j]) points[j] = std::make_unique<slam::MapPoint>(to_slam(est * c), j);
       slam::MapPoint& mp = *points[j];
-      mp.AddObservation();
+      mp.AddObservation(kf.get(), j, /*stereo=*/true);
       mp.IncreaseVisible(2);
       mp.IncreaseFound(found(rng) ? 2 : 1);
       kf->AddMapPoint(&mp, j);

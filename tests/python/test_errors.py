@@ -89,6 +89,10 @@ def test_bad_mapper_arguments(knnocc):
             mapper.insert_keyframe((0, 0, 0), POINTS, ids)
     with pytest.raises(ValueError, match="reserved"):
         mapper.insert_keyframe((0, 0, 0), POINTS, np.full(4, 2**64 - 1, np.uint64))
+    for evidence in [np.ones((4, 2), int), np.ones((3, 3), int), np.full((4, 3), -1),
+                     np.full((4, 3), 2**32), np.ones((4, 3)), "abcd"]:
+        with pytest.raises(ValueError, match="evidence"):
+            mapper.insert_keyframe((0, 0, 0), POINTS, np.arange(4), evidence=evidence)
     mapper.insert_keyframe((0, 0, 0), POINTS, np.arange(4))
     with pytest.raises(ValueError, match="mixed"):  # a sequence gives ids always or never
         mapper.insert_keyframe((0, 0, 0), POINTS)

@@ -92,3 +92,47 @@ def test_read_points_reads_every_format(knnocc, drift_scene, tmp_path):
             assert np.allclose(got, points, rtol=1e-6, atol=1e-6), name
     # The sequence's poses are the trajectory file's.
     assert np.array_equal(knnocc.read_trajectory(drift_scene / "poses.txt")[0], seq_pose)
+
+
+def write_counted_ply(path, points, ids, evidence):
+    """A binary PLY keyframe with ids and the SLAM counters (found, visible, observations)."""
+    rows = np.empty(len(points), dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("id", "<u4"),
+                                        ("found", "<u4"), ("visible", "<u4"),
+                                        ("observations", "<u4")])
+    for c, name in enumerate("xyz"):
+        rows[name] = points[:, c]
+    rows["id"] = ids
+    for c, name in enumerate(("found", "visible", "observations")):
+        rows[name] = evidence[:, c]
+    header = ("ply\nformat binary_little_endian 1.0\nelement vertex %d\n" % len(points) +
+              "".join("property %s %s\n" % ("float" if n in "xyz" else "uint", n)
+                      for n in rows.dtype.names) + "end_header\n")
+    path.write_bytes(header.encode() + rows.tobytes())
+
+
+def test_robust_with_slam_counters_equals_the_tool(knnocc, drift_scene, tmp_path):
+    truth, counted = drift_scene / "truth", tmp_path / "counted"
+    (counted / "clouds").mkdir(parents=True)
+    (counted / "poses.txt").write_bytes((truth / "poses.txt").read_bytes())
+    rng = np.random.default_rng(5)
+    written = []
+    for i, (pose, points, ids) in enumerate(knnocc.read_sequence(truth)):
+        visible = rng.integers(1, 40, size=len(points))
+        found = (visible * rng.uniform(0.05, 1.0, size=len(points))).astype(np.int64)
+        evidence = np.stack([found, visible, rng.integers(1, 12, size=len(points))], axis=1)
+        write_counted_ply(counted / "clouds" / ("%06d.ply" % i), points, ids, evidence)
+        written.append(evidence)
+    bt, ot, _ = tool_map(tmp_path, "robust_counted", "--input", counted, "--model", "robust",
+                         "--res", 0.1)
+    seq = knnocc.read_sequence(counted)
+    with_counters = knnocc.Mapper(0.1, model="robust")
+    without = knnocc.Mapper(0.1, model="robust")
+    for i, (pose, points, ids) in enumerate(seq):
+        assert np.array_equal(seq.evidence(i), written[i])
+        world = knnocc.to_world(pose, points)
+        with_counters.insert_keyframe(pose[:3, 3], world, ids, evidence=seq.evidence(i))
+        without.insert_keyframe(pose[:3, 3], world, ids)
+    assert with_counters.map.to_bytes("bt") == bt
+    assert with_counters.map.to_bytes("ot") == ot
+    assert without.map.to_bytes("bt") != bt  # the counters are used
+    assert knnocc.read_sequence(truth).evidence(0) is None

@@ -53,6 +53,10 @@ Point3d vec3_in(py::handle obj, const char* name);
 Pose pose_in(py::handle obj, const char* name);
 /// None (no ids) or n non-negative integers; ValueError otherwise.
 std::vector<std::uint64_t> ids_in(py::handle obj, std::size_t n, const char* name);
+/// None (no counters) or an (n, 3) integer array of a SLAM system's found, visible and
+/// observations counts per point (core/point_evidence.hpp), each in [0, 2^32 - 1]; ValueError
+/// otherwise.
+std::vector<PointEvidence> evidence_in(py::handle obj, std::size_t n, const char* name);
 /// A non-negative integer (a keyframe id); TypeError or ValueError otherwise.
 std::uint64_t id_in(py::handle obj, const char* name);
 /// A str, bytes or os.PathLike path.

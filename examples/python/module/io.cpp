@@ -37,6 +37,17 @@ py::tuple keyframe(const SequenceRef& s, py::ssize_t i) {
   return py::make_tuple(pose_out(Pose::from(scan.pose)), cloud[0], cloud[1]);
 }
 
+// The SLAM counters of keyframe i as (N, 3) uint32 (found, visible, observations), or None.
+py::object keyframe_evidence(const SequenceRef& s, py::ssize_t i) {
+  const auto n = static_cast<py::ssize_t>(s.source.size());
+  if (i < 0) i += n;
+  if (i < 0 || i >= n) throw py::index_error("keyframe index out of range");
+  io::Scan scan = without_gil([&] { return s.source.load(static_cast<std::size_t>(i)); });
+  if (scan.cloud.evidence.empty()) return py::none();
+  const auto rows = static_cast<py::ssize_t>(scan.cloud.evidence.size());
+  return adopt<std::uint32_t>(std::move(scan.cloud.evidence), {rows, 3});
+}
+
 constexpr const char* kSequenceDoc = R"(The keyframes of a sequence, loaded one at a time.
 
 What read_sequence(path) returns: len(seq) keyframes; seq[i] (and iteration) gives
@@ -66,6 +77,10 @@ malformed.)");
   seq.def("__getitem__", &keyframe, py::arg("index"),
           "(pose, points, ids) of keyframe `index` (negative counts from the end); "
           "knnocc.Error when its file is malformed.");
+  seq.def("evidence", &keyframe_evidence, py::arg("index"),
+          "The SLAM counters of keyframe `index` (PLY `found`, `visible`, `observations`) as "
+          "(N, 3) uint32, one row per point of seq[index], or None when its cloud has none; for "
+          "Mapper.insert_keyframe(..., evidence=...).");
   seq.def(
       "__iter__",
       [](py::object self) {

@@ -174,8 +174,8 @@ Mapper(resolution, model="octomap", **params)
   model="octomap"  OctoMap's insertPointCloud, bit for bit (dense depth cameras, LiDAR)
   model="knn"      the paper's k-NN model: each point rated by its mean distance to its k
                    nearest map points (sparse visual-SLAM keyframes)
-  model="robust"   beyond the paper: multi-view and independent support (ORB-SLAM keyframes
-                   with map-point ids)
+  model="robust"   beyond the paper: map points believed real under a mixture fitted to the
+                   sequence (ORB-SLAM keyframes with map-point ids)
 
   mapper = knnocc.Mapper(0.1, model="knn", k=8)
   for pose, points, ids in knnocc.read_sequence("keyframes"):
@@ -213,20 +213,25 @@ void bind_mappers(py::module_& m) {
   mapper.def(
       "insert_keyframe",
       [](const MapperRef& self, const py::object& origin, const py::object& points,
-         const py::object& ids) {
+         const py::object& ids, const py::object& evidence) {
         const Point3d o = vec3_in(origin, "origin");
         const PointsIn in(points, "points");
         const std::vector<std::uint64_t> id = ids_in(ids, in.size(), "ids");
+        const std::vector<PointEvidence> ev = evidence_in(evidence, in.size(), "evidence");
         const auto lock = self.owner->guard.write("Mapper.insert_keyframe");
         const py::gil_scoped_release nogil;
-        self.owner->insert_keyframe(o, in.view(), id);
+        self.owner->insert_keyframe(o, in.view(), id, ev);
       },
       py::arg("origin"), py::arg("points"), py::arg("ids") = py::none(),
+      py::arg("evidence") = py::none(),
       R"(Alg. 3 for one keyframe: `points` (N, 3) in the world frame seen from `origin` (the sensor
 position, 3 numbers); `ids` one map-point id per point (e.g. ORB-SLAM's MapPoint::mnId) or None.
 The map point cloud is the union of the keyframes' points: an id joins once, at its first
 position; without ids every point is a new map point. A sequence gives ids always or never
-(ValueError otherwise). The OctoMap model ignores ids. MemoryError past memory_limit.)");
+(ValueError otherwise). The OctoMap model ignores ids. `evidence`: None or (N, 3) integers, the
+SLAM system's found, visible and observations counts per point (Sequence.evidence(i) reads them
+from PLY clouds), which the robust model uses; the others ignore them. MemoryError past
+memory_limit.)");
   bind_owner_members(mapper, "Mapper", "'octomap', 'knn' or 'robust'.");
 
   py::class_<LiveRef> live(m, "LiveMapper", (std::string(kLiveDoc) + kParamsDoc).c_str());

@@ -17,8 +17,9 @@ class MapperOf final : public MapperOwner {
   const Map& map() const override { return mapper_.map(); }
   void set_memory_limit(std::size_t bytes) override { mapper_.map().set_memory_limit(bytes); }
   void insert_keyframe(const Point3d& origin, const PointsView& points,
-                       const std::vector<std::uint64_t>& ids) override {
-    points.visit([&](const auto& span) { mapper_.insert_keyframe(origin, span, ids); });
+                       const std::vector<std::uint64_t>& ids,
+                       const std::vector<PointEvidence>& evidence) override {
+    points.visit([&](const auto& span) { mapper_.insert_keyframe(origin, span, ids, evidence); });
   }
   TrackerStats statistics() const override {
     if constexpr (Mapper<Model>::uses_map_cloud)

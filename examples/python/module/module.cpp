@@ -80,6 +80,30 @@ Pose pose_in(py::handle obj, const char* name) {
   return p;
 }
 
+std::vector<PointEvidence> evidence_in(py::handle obj, std::size_t n, const char* name) {
+  if (obj.is_none()) return {};
+  const std::string what(name);
+  const auto kind = py::array::ensure(obj);
+  if (!kind || (kind.dtype().kind() != 'i' && kind.dtype().kind() != 'u'))
+    throw py::value_error(what + " must be integers (found, visible, observations per point) or "
+                                 "None");
+  const auto a = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(kind);
+  if (!a || a.ndim() != 2 || static_cast<std::size_t>(a.shape(0)) != n || a.shape(1) != 3)
+    throw py::value_error(what + " must have shape (" + std::to_string(n) +
+                          ", 3): found, visible, observations per point; got shape " +
+                          shape_text(kind));
+  std::vector<PointEvidence> out(n);
+  const std::int64_t* v = a.data();
+  for (std::size_t i = 0; i < n; ++i, v += 3) {
+    for (int c = 0; c < 3; ++c)
+      if (v[c] < 0 || v[c] > 0xFFFFFFFFll)
+        throw py::value_error(what + " must be in [0, 2^32 - 1]");
+    out[i] = PointEvidence{static_cast<std::uint32_t>(v[0]), static_cast<std::uint32_t>(v[1]),
+                           static_cast<std::uint32_t>(v[2])};
+  }
+  return out;
+}
+
 std::vector<std::uint64_t> ids_in(py::handle obj, std::size_t n, const char* name) {
   if (obj.is_none()) return {};
   const std::string what(name);

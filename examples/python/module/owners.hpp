@@ -17,6 +17,7 @@
 #include <knnocc/core/key.hpp>
 #include <knnocc/core/log_odds.hpp>
 #include <knnocc/core/point3.hpp>
+#include <knnocc/core/point_evidence.hpp>
 #include <knnocc/live/live_mapper.hpp>
 #include <knnocc/map/occupancy_map.hpp>
 #include <knnocc/mapper.hpp>
@@ -87,9 +88,10 @@ std::shared_ptr<MapObject> make_map_object(Map map, double prob_hit, double prob
 /// Mapper<Model> for one of the three models.
 class MapperOwner : public MapOwner {
  public:
-  /// `ids` empty or one per point.
+  /// `ids` and `evidence` (the SLAM counters) each empty or one per point.
   virtual void insert_keyframe(const Point3d& origin, const PointsView& points,
-                               const std::vector<std::uint64_t>& ids) = 0;
+                               const std::vector<std::uint64_t>& ids,
+                               const std::vector<PointEvidence>& evidence) = 0;
   virtual TrackerStats statistics() const = 0;
 };
 std::shared_ptr<MapperOwner> make_octomap_mapper(double resolution, const ModelOptions& o);

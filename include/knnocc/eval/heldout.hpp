@@ -33,6 +33,7 @@
 #include "../core/config.hpp"
 #include "../core/key.hpp"
 #include "../core/point3.hpp"
+#include "../core/point_evidence.hpp"
 #include "../core/point_traits.hpp"
 #include "../map/occupancy_map.hpp"
 #include "../raycast/dda.hpp"
@@ -44,6 +45,7 @@ struct IdKeyframe {
   Point3d origin;
   std::vector<Point3d> points;
   std::vector<std::uint64_t> ids;
+  std::vector<PointEvidence> evidence;  ///< the SLAM counters, one per point, or empty
 };
 
 struct HeldoutOptions {

@@ -575,11 +575,13 @@ inline Cloud read_ply(const std::string& path) {
 }
 
 // Writes "float x y z" (+ "uint id" when ids is given, + "uchar red green blue" when colors is
-// given) as binary little-endian or ascii PLY. ids and colors must have one entry per point and
-// each id must fit in 32 bits. Atomic: temp file + rename.
+// given, + "uint found visible observations" when evidence is given) as binary little-endian or
+// ascii PLY. ids, colors and evidence must have one entry per point and each id must fit in 32
+// bits. Atomic: temp file + rename.
 inline void write_ply(const std::string& path, const std::vector<Point3f>& pts,
                       const std::vector<std::uint64_t>* ids = nullptr, bool binary = true,
-                      const std::vector<Rgb>* colors = nullptr) {
+                      const std::vector<Rgb>* colors = nullptr,
+                      const std::vector<PointEvidence>* evidence = nullptr) {
   const auto check_size = [&](std::size_t n, const char* what) {
     if (n != pts.size()) {
       throw Error(path, "write_ply: " + std::to_string(n) + " " + what + " for " +
@@ -596,18 +598,20 @@ inline void write_ply(const std::string& path, const std::vector<Point3f>& pts,
     }
   }
   if (colors) check_size(colors->size(), "colours");
+  if (evidence) check_size(evidence->size(), "SLAM counters");
   std::string header = "ply\nformat ";
   header += binary ? "binary_little_endian 1.0\n" : "ascii 1.0\n";
   header += "comment written by knnocc\nelement vertex " + std::to_string(pts.size()) +
             "\nproperty float x\nproperty float y\nproperty float z\n";
   if (ids) header += "property uint id\n";
   if (colors) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  if (evidence) header += "property uint found\nproperty uint visible\nproperty uint observations\n";
   header += "end_header\n";
 
   AtomicFile out(path);
   out.write(header);
   if (binary) {
-    const std::size_t rec = 12 + (ids ? 4 : 0) + (colors ? 3 : 0);
+    const std::size_t rec = 12 + (ids ? 4 : 0) + (colors ? 3 : 0) + (evidence ? 12 : 0);
     std::vector<char> body(pts.size() * rec);
     if (rec == 12 && detail::host_is_little_endian()) {
       if (!pts.empty()) std::memcpy(body.data(), pts.data(), body.size());
@@ -627,6 +631,13 @@ inline void write_ply(const std::string& path, const std::vector<Point3f>& pts,
           r[0] = static_cast<char>(c.r);
           r[1] = static_cast<char>(c.g);
           r[2] = static_cast<char>(c.b);
+          r += 3;
+        }
+        if (evidence) {
+          const PointEvidence& e = (*evidence)[i];
+          detail::store_le(r, e.found);
+          detail::store_le(r + 4, e.visible);
+          detail::store_le(r + 8, e.observations);
         }
       }
     }
@@ -655,6 +666,13 @@ inline void write_ply(const std::string& path, const std::vector<Point3f>& pts,
           w = std::to_chars(w, lim, unsigned{v}).ptr;
         }
       }
+      if (evidence) {
+        const PointEvidence& e = (*evidence)[i];
+        for (const std::uint32_t v : {e.found, e.visible, e.observations}) {
+          *w++ = ' ';
+          w = std::to_chars(w, lim, v).ptr;
+        }
+      }
       *w++ = '\n';
     }
     out.write(chunk.data(), static_cast<std::size_t>(w - chunk.data()));
@@ -662,10 +680,11 @@ inline void write_ply(const std::string& path, const std::vector<Point3f>& pts,
   out.commit();
 }
 
-/// Writes a cloud with every column it has (ids, colours); see above.
+/// Writes a cloud with every column it has (ids, colours, SLAM counters); see above.
 inline void write_ply_cloud(const std::string& path, const Cloud& cloud, bool binary = true) {
   write_ply(path, cloud.points, cloud.ids.empty() ? nullptr : &cloud.ids, binary,
-            cloud.colors.empty() ? nullptr : &cloud.colors);
+            cloud.colors.empty() ? nullptr : &cloud.colors,
+            cloud.evidence.empty() ? nullptr : &cloud.evidence);
 }
 
 }  // namespace knnocc::io

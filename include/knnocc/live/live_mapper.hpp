@@ -31,6 +31,9 @@
 //             later keyframe's ratings change, and the tracker's Welford sums cannot be rewound
 //             bit for bit; the map and tracker are rebuilt from scratch (the cost of a rebuild).
 //
+// Models: OctoMapModel, KnnModel, or one of the same kinds (sensor/sensor_model.hpp); a
+// cloud-rated or contextual model is refused at compile time.
+//
 // A LiveMapper is movable; a moved-from one may only be destroyed or assigned to.
 //
 // Thread safety: one writer; const queries are safe from many threads while no operation runs.
@@ -66,6 +69,11 @@ class LiveMapper {
                 "LiveMapper's Pose needs pose_traits<Pose> with static Point3d origin(const "
                 "Pose&) and static Point3d to_world(const Pose&, const Point3f&) "
                 "(live/rigid_pose.hpp)");
+
+  static_assert(!Mapper<Model, Key>::rates_cloud && !Mapper<Model, Key>::contextual,
+                "LiveMapper takes a fixed model (OctoMapModel) or one rated per endpoint "
+                "(KnnModel): a cloud-rated model (Knn2022Model) or a contextual one (RobustModel) "
+                "has no exact replay here; map with Mapper");
 
  public:
   using mapper_type = Mapper<Model, Key>;

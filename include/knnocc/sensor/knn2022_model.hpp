@@ -2,9 +2,9 @@
 #pragma once
 // Knn2022Model: the authors' follow-up model (Miao, Hunter, Georgilas, "An Occupancy Mapping
 // Method Based on K-Nearest Neighbours", Sensors 22(1):139, 2022), a cloud-rated sensor model
-// (sensor/cloud_model.hpp). Their code was not found; this follows the model as issue 33
-// summarises the authors' public code, and docs/evaluation.md lists the choices made where that
-// summary is silent.
+// (sensor/cloud_model.hpp). Their code was not found; this follows a description of
+// the authors' public code (docs/evaluation.md), which also lists the choices made where that
+// description is silent.
 //
 // Per keyframe (points in the world frame, sensor at o):
 //   inner points  the finite points within inner_range (4 m) of o;

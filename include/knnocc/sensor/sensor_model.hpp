@@ -5,7 +5,7 @@
 //
 // Every model has
 //   float miss_logodds() const;      the update of a voxel a ray crosses (once per scan)
-// and is of one of three kinds:
+// and is of one of four kinds:
 //   - fixed (OctoMapModel, paper eq 4): static constexpr bool uses_map_cloud = false (or absent),
 //       float hit_logodds() const;   the update of a voxel holding endpoints (once per scan,
 //                                    occupied wins over free)
@@ -23,8 +23,8 @@
 //       using tracker_type = ...;    the tracker Mapper keeps by default (knn/tracker_concept.hpp)
 //       TrackerParams tracker_params() const;   optional: how that tracker is constructed
 //     (a Mapper given a constructed tracker needs neither).
-// A third kind rates each keyframe from its own cloud alone, with free space in two layers
-// (Knn2022Model): static constexpr bool rates_cloud = true, see sensor/cloud_model.hpp.
+// The fourth kind, cloud-rated (Knn2022Model), rates each keyframe from its own cloud alone, with
+// free space in two layers: static constexpr bool rates_cloud = true, see sensor/cloud_model.hpp.
 // examples/custom_policies.cpp writes a rated model of its own.
 
 #include <type_traits>

@@ -6,6 +6,7 @@
 // exporter's test, not ORB-SLAM.
 
 #include <cstddef>
+#include <map>
 #include <mutex>
 #include <set>
 #include <vector>
@@ -36,13 +37,20 @@ class BasicMapPoint {
     std::unique_lock<std::mutex> lock(mMutexPos);
     return copy_of(mWorldPos);
   }
+  // ORB-SLAM: nObs counts a stereo observation twice; GetObservations() holds one entry per
+  // keyframe (ORB-SLAM2: std::map<KeyFrame*, size_t>; ORB-SLAM3's value is a tuple of indices).
   int Observations() {
     std::unique_lock<std::mutex> lock(mMutexFeatures);
     return nObs;
   }
-  void AddObservation() {  // ORB-SLAM: AddObservation(KeyFrame*, index)
+  std::map<const void*, std::size_t> GetObservations() {
     std::unique_lock<std::mutex> lock(mMutexFeatures);
-    ++nObs;
+    return mObservations;
+  }
+  void AddObservation(const void* pKF, std::size_t idx, bool stereo) {
+    std::unique_lock<std::mutex> lock(mMutexFeatures);
+    if (!mObservations.emplace(pKF, idx).second) return;
+    nObs += stereo ? 2 : 1;
   }
   void SetBadFlag() {
     std::unique_lock<std::mutex> lock(mMutexFeatures);
@@ -74,6 +82,7 @@ class BasicMapPoint {
   int mnVisible = 1;
   int mnFound = 1;
   bool mbBad = false;
+  std::map<const void*, std::size_t> mObservations;
   std::mutex mMutexPos;
   std::mutex mMutexFeatures;
 };

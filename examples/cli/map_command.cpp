@@ -79,7 +79,8 @@ const char* kRobustText =
   from its third detection; a point no longer believed takes its evidence back; one keyframe
   adds the mean of its endpoints in a voxel. Without map-point ids it is OctoMap's model and
   keeps no map point cloud (the knn line then says map_points 0). Prints the knn line.
-  Rules, constants, measurements and where it loses: docs/robust_model.md.
+  Where it loses: wrong matches the SLAM system re-detects in every keyframe for 8 keyframes or
+  more look real to it. Rules, constants, measurements: docs/robust_model.md.
 )";
 
 const char* kKnn2022Text =

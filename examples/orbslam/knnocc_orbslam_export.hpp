@@ -9,8 +9,8 @@
 //                                     ones skipped) in the camera frame, binary PLY: float x y z,
 //                                     uint id (MapPoint::mnId), and the point's evidence then:
 //                                     uint found (GetFound), visible (found / GetFoundRatio),
-//                                     observations (GetObservations().size(): keyframes that see it;
-//                                     Observations() counts a stereo one twice)
+//                                     observations (GetObservations().size(): keyframes that see
+//                                     it; Observations() counts a stereo one twice)
 //   DIR/corrections/after_NNNNNN.txt  after each loop closure or global bundle adjustment (ORB-SLAM
 //                                     raises Map::GetLastBigChangeIdx for both), and at finish():
 //                                     the poses of keyframes 0..NNNNNN then, for `--corrections`
@@ -36,7 +36,7 @@
 // followed: when ORB-SLAM3 starts a new map in its Atlas, start a new exporter.
 //
 // Both APIs are told apart by their types: cv::Mat poses and positions (ORB-SLAM2) or
-// Sophus::SE3f and Eigen::Vector3f (ORB-SLAM3). Needs C++17 and Eigen (which both build with).
+// Sophus::SE3f and Eigen::Vector3f (ORB-SLAM3). Needs C++11, Eigen and POSIX (as both build).
 // File errors throw std::runtime_error naming the file; every file is written to a temporary
 // beside it and renamed, so a reader never sees half a file.
 
@@ -48,14 +48,18 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <map>
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
-namespace knnocc::orbslam {
+#include <errno.h>
+#include <sys/stat.h>
+
+namespace knnocc {
+namespace orbslam {
 
 struct ExportOptions {
   /// A keyframe is written once this many newer keyframes exist (all of them at finish()).
@@ -83,7 +87,10 @@ auto to_pose(const Mat& T, int) -> decltype(T.template at<float>(0, 0), Pose()) 
 // ORB-SLAM3: Sophus::SE3f.
 template <class SE3>
 auto to_pose(const SE3& T, long) -> decltype(T.rotationMatrix(), T.translation(), Pose()) {
-  return Pose{T.rotationMatrix().template cast<double>(), T.translation().template cast<double>()};
+  Pose p;
+  p.R = T.rotationMatrix().template cast<double>();
+  p.t = T.translation().template cast<double>();
+  return p;
 }
 // ORB-SLAM2: a 3x1 CV_32F cv::Mat; ORB-SLAM3: Eigen::Vector3f.
 template <class Mat>
@@ -117,6 +124,18 @@ inline void write_file(const std::string& path, const std::string& bytes) {
   }
 }
 
+// Creates `dir` and its missing parents (mkdir -p); std::runtime_error naming it otherwise.
+inline void make_dirs(const std::string& dir) {
+  for (std::size_t at = 1; at <= dir.size(); ++at) {
+    if (at < dir.size() && dir[at] != '/') continue;
+    const std::string part = dir.substr(0, at);
+    struct stat st;
+    if (::mkdir(part.c_str(), 0777) != 0 &&
+        !(errno == EEXIST && ::stat(part.c_str(), &st) == 0 && S_ISDIR(st.st_mode)))
+      throw std::runtime_error(part + ": cannot create the folder: " + std::strerror(errno));
+  }
+}
+
 inline std::string pose_line(double stamp, const Pose& p) {
   const Eigen::Quaterniond q(p.R);
   char line[256];
@@ -131,10 +150,8 @@ class KeyframeExporter {
  public:
   explicit KeyframeExporter(const std::string& dir, ExportOptions options = {})
       : dir_(dir), options_(options) {
-    std::error_code ec;
-    std::filesystem::create_directories(std::filesystem::path(dir) / "clouds", ec);
-    if (!ec) std::filesystem::create_directories(std::filesystem::path(dir) / "corrections", ec);
-    if (ec) throw std::runtime_error(dir + ": cannot create the folder: " + ec.message());
+    detail::make_dirs(dir_ + "/clouds");
+    detail::make_dirs(dir_ + "/corrections");
   }
 
   /// Writes the keyframes that have `lag` newer ones, and a correction snapshot when ORB-SLAM
@@ -171,11 +188,12 @@ class KeyframeExporter {
   void export_keyframes(Map* map, std::size_t lag) {
     std::unique_lock<std::mutex> lock(map->mMutexMapUpdate);
     auto keyframes = map->GetAllKeyFrames();
-    keyframes.erase(
-        std::remove_if(keyframes.begin(), keyframes.end(), [](auto* kf) { return kf->isBad(); }),
-        keyframes.end());
+    typedef typename decltype(keyframes)::value_type KeyFramePtr;
+    keyframes.erase(std::remove_if(keyframes.begin(), keyframes.end(),
+                                   [](KeyFramePtr kf) { return kf->isBad(); }),
+                    keyframes.end());
     std::sort(keyframes.begin(), keyframes.end(),
-              [](const auto* a, const auto* b) { return a->mnId < b->mnId; });
+              [](KeyFramePtr a, KeyFramePtr b) { return a->mnId < b->mnId; });
     std::size_t fresh = 0;  // keyframes not written yet (they follow the written ones by mnId)
     for (auto* kf : keyframes) {
       const auto at = index_.find(kf->mnId);
@@ -221,7 +239,7 @@ class KeyframeExporter {
         "property uint found\nproperty uint visible\nproperty uint observations\nend_header\n";
     char name[32];
     std::snprintf(name, sizeof name, "%06zu.ply", written_.size());
-    detail::write_file((std::filesystem::path(dir_) / "clouds" / name).string(), header + body);
+    detail::write_file(dir_ + "/clouds/" + name, header + body);
     index_.emplace(kf.mnId, written_.size());
     written_.push_back({kf.mnId, kf.mTimeStamp, twc, twc});
   }
@@ -229,7 +247,7 @@ class KeyframeExporter {
   void write_poses() const {
     std::string text = "# stamp tx ty tz qx qy qz qw (camera to world when written)\n";
     for (const Written& w : written_) text += detail::pose_line(w.stamp, w.written);
-    detail::write_file((std::filesystem::path(dir_) / "poses.txt").string(), text);
+    detail::write_file(dir_ + "/poses.txt", text);
   }
 
   void write_snapshot() {
@@ -237,7 +255,7 @@ class KeyframeExporter {
     for (const Written& w : written_) text += detail::pose_line(w.stamp, w.current);
     char name[40];
     std::snprintf(name, sizeof name, "after_%06zu.txt", written_.size() - 1);
-    detail::write_file((std::filesystem::path(dir_) / "corrections" / name).string(), text);
+    detail::write_file(dir_ + "/corrections/" + name, text);
     ++snapshots_;
   }
 
@@ -249,4 +267,5 @@ class KeyframeExporter {
   std::size_t snapshots_ = 0;
 };
 
-}  // namespace knnocc::orbslam
+}  // namespace orbslam
+}  // namespace knnocc

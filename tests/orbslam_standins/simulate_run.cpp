@@ -101,14 +101,14 @@ struct Run {
   void add_keyframe(int i, std::mt19937& rng) {
     drift.push_back(i <= kLoopAt ? 0.004 * i : 0.0);
     const Eigen::Isometry3d est = camera_pose(i, drift.back()), gt = camera_pose(i, 0.0);
-    auto kf = std::make_unique<slam::KeyFrame>(i, 100.0 + 0.5 * i, truth.size());
+    std::unique_ptr<slam::KeyFrame> kf(new slam::KeyFrame(i, 100.0 + 0.5 * i, truth.size()));
     kf->SetPose(to_slam(est.inverse()));
     std::bernoulli_distribution found(0.8);
     for (std::size_t j = 0; j < truth.size(); ++j) {
       const Eigen::Vector3d c = gt.inverse() * truth[j];
       if (!(c.z() > 0.3 && c.norm() < 5.0 && std::abs(c.x()) < c.z() && std::abs(c.y()) < c.z()))
         continue;
-      if (!points[j]) points[j] = std::make_unique<slam::MapPoint>(to_slam(est * c), j);
+      if (!points[j]) points[j].reset(new slam::MapPoint(to_slam(est * c), j));
       slam::MapPoint& mp = *points[j];
       mp.AddObservation(kf.get(), j, /*stereo=*/true);
       mp.IncreaseVisible(2);

@@ -85,8 +85,9 @@ std::vector<PointEvidence> evidence_in(py::handle obj, std::size_t n, const char
   const std::string what(name);
   const auto kind = py::array::ensure(obj);
   if (!kind || (kind.dtype().kind() != 'i' && kind.dtype().kind() != 'u'))
-    throw py::value_error(what + " must be integers (found, visible, observations per point) or "
-                                 "None");
+    throw py::value_error(what +
+                          " must be integers (found, visible, observations per point) or "
+                          "None");
   const auto a = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(kind);
   if (!a || a.ndim() != 2 || static_cast<std::size_t>(a.shape(0)) != n || a.shape(1) != 3)
     throw py::value_error(what + " must have shape (" + std::to_string(n) +

@@ -605,7 +605,8 @@ inline void write_ply(const std::string& path, const std::vector<Point3f>& pts,
             "\nproperty float x\nproperty float y\nproperty float z\n";
   if (ids) header += "property uint id\n";
   if (colors) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-  if (evidence) header += "property uint found\nproperty uint visible\nproperty uint observations\n";
+  if (evidence)
+    header += "property uint found\nproperty uint visible\nproperty uint observations\n";
   header += "end_header\n";
 
   AtomicFile out(path);

@@ -236,7 +236,9 @@ TEST_CASE("robust model: its ledger and see-throughs equal a brute-force recompu
   std::size_t seen_through = 0, disbelieved = 0, supported = 0;
   std::map<std::uint64_t, std::uint32_t> believed_in;  // voxel -> believed points
   std::set<std::uint64_t> voxels;
-  for (const auto& [id, t] : truth) {
+  for (const auto& entry : truth) {
+    const std::uint64_t id = entry.first;  // not a structured binding: CAPTURE captures it
+    const auto& t = entry.second;
     CAPTURE(id);
     const MapPointLedger::Point* p = model.map_points().find(id);
     REQUIRE(p != nullptr);

@@ -46,8 +46,9 @@ TEST_CASE("voxel_colors.mean of the points in each voxel, as a brute force") {
   }
   CHECK(colors.size() == sums.size());
   std::size_t wrong = 0;
-  for (const auto& [packed, s] : sums) {
-    const auto m = colors.mean(OcKey::unpack(packed));
+  for (const auto& entry : sums) {
+    const auto& s = entry.second;  // not a structured binding: lambdas capture it (clang 14)
+    const auto m = colors.mean(OcKey::unpack(entry.first));
     REQUIRE(m);
     const auto expect = [&](int ch) { return static_cast<int>(std::floor(s[ch] / s[3] + 0.5)); };
     wrong += m->r != expect(0) || m->g != expect(1) || m->b != expect(2);

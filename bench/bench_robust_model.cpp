@@ -16,9 +16,11 @@
 //   matches unlike the named regimes' (the sensitivity grid below covers them all)
 //
 //   build/bin/bench_robust_model --grid [--seeds N] [--patch 1,2] [--lifetime 0,4] [--prob 1]
-//     [--no-mixed] [--no-tune] [--png-dir DIR]
+//     [--no-mixed] [--no-tune] [--tuning] [--variant NAME] [--png-dir DIR]
 //   the sensitivity grid on the report seeds (bench/quality_grid.hpp), heat maps in DIR
-//   (default build/grid); --no-tune skips the OctoMap oracle (the slowest part)
+//   (default build/grid); --no-tune skips the OctoMap oracle (the slowest part); --tuning scores
+//   on the tuning seeds instead (for developing a model; report with the report seeds); --variant
+//   puts a rule variant of the robust model in its column (bench/quality_grid.hpp)
 
 #include <algorithm>
 #include <cmath>
@@ -276,6 +278,10 @@ int main(int argc, char** argv) {
           g.mixed = false;
         else if (!std::strcmp(argv[j], "--no-tune"))
           g.tune = false;
+        else if (!std::strcmp(argv[j], "--tuning"))
+          g.tuning = true;
+        else if (!std::strcmp(argv[j], "--variant") && more)
+          g.variant = argv[++j];
         else if (!std::strcmp(argv[j], "--png-dir") && more)
           g.png_dir = argv[++j];
       }

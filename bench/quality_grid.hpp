@@ -1,6 +1,7 @@
 #pragma once
 // bench_robust_model --grid: every model on every cell of the simulator's sensitivity grid
-// (sim/sensitivity_grid.hpp), report seeds only, 0.1 m, 4 m crop. Per model and cell: irrelevant
+// (sim/sensitivity_grid.hpp), report seeds (or, with --tuning, the tuning seeds: for developing a
+// model, never for reporting it), 0.1 m, 4 m crop. Per model and cell: irrelevant
 // nodes and nodes in shell as % of the OctoMap model's (sums over the seeds; the paper's Table 1,
 // eval/metrics.hpp) and F1 and MCC of the authors' counting against the voxelised shapes
 // (eval/confusion.hpp, counts summed over the seeds). The models:
@@ -14,7 +15,9 @@
 //   knn2022o     the same with running (online) statistics
 //   knn2022c     knn2022 (first pass) given the 4 m crop like the other models: no point lies
 //                beyond its inner range, so its weak outer rays are gone
-//   robust       RobustModel with its defaults, whatever they are at the time
+//   robust       RobustModel with its defaults, whatever they are at the time, or with --variant
+//                NAME one of its rule variants (bench/robust_variants.hpp: -witness, +through,
+//                -both), to measure a rule against the defaults on the same cells
 // Then the goals, the "no cliff" figure (the largest change of a model's irrelevant share between
 // neighbouring cells) and one heat-map PNG per model (bench/heat_map.hpp).
 
@@ -40,6 +43,7 @@
 #include "bench_common.hpp"
 #include "heat_map.hpp"
 #include "knn2022_sweep.hpp"
+#include "robust_variants.hpp"
 
 namespace knnocc::bench {
 
@@ -49,6 +53,10 @@ struct GridOptions {
   std::vector<double> probabilities;
   bool mixed = true;
   bool tune = true;  ///< run the OctoMap oracle
+  /// Score on the tuning seeds instead of the report seeds (for developing a model; the oracle
+  /// then picks its setting on the seeds it is scored on, so it is in-sample).
+  bool tuning = false;
+  std::string variant;  ///< the robust column's rule variant (empty: the defaults)
   std::string png_dir = "build/grid";
 };
 
@@ -113,6 +121,12 @@ inline bool wanted(const std::vector<std::size_t>& subset, std::size_t v) {
 }
 
 inline int run_grid(const GridOptions& opt) {
+  if (!opt.variant.empty() && opt.variant != "-witness" && opt.variant != "+through" &&
+      opt.variant != "-both") {
+    std::fprintf(stderr, "bench_robust_model: unknown --variant %s (-witness, +through, -both)\n",
+                 opt.variant.c_str());
+    return 2;
+  }
   std::vector<sim::GridCell> cells;
   for (const sim::GridCell& c : sim::sensitivity_grid()) {
     if (c.mixed ? !opt.mixed
@@ -124,12 +138,17 @@ inline int run_grid(const GridOptions& opt) {
     cells.push_back(c);
   }
   const std::size_t seeds = std::clamp<std::size_t>(opt.seeds, 1, sim::kReportSeeds.size());
+  const auto& scored = opt.tuning ? sim::kTuningSeeds : sim::kReportSeeds;
+  const char* scored_name = opt.tuning ? "tuning" : "report";
   std::printf(
-      "sensitivity grid: %zu cells, report seeds %llu..%llu (tuning seeds %llu..%llu: the "
-      "OctoMap oracle's choice only), 0.1 m, 4 m crop\n",
-      cells.size(), (unsigned long long)sim::kReportSeeds[0],
-      (unsigned long long)sim::kReportSeeds[seeds - 1], (unsigned long long)sim::kTuningSeeds[0],
-      (unsigned long long)sim::kTuningSeeds[seeds - 1]);
+      "sensitivity grid: %zu cells, %s seeds %llu..%llu (tuning seeds %llu..%llu: the "
+      "OctoMap oracle's choice%s), 0.1 m, 4 m crop\n",
+      cells.size(), scored_name, (unsigned long long)scored[0],
+      (unsigned long long)scored[seeds - 1], (unsigned long long)sim::kTuningSeeds[0],
+      (unsigned long long)sim::kTuningSeeds[seeds - 1],
+      opt.tuning ? ", in-sample: scored on the seeds that chose it" : " only");
+  if (!opt.variant.empty())
+    std::printf("robust column: the variant %s (bench/robust_variants.hpp)\n", opt.variant.c_str());
   const std::vector<std::string> names{"octomap",  "octomap*", "knn",   "knn2022",
                                        "knn2022o", "knn2022c", "robust"};
   const std::size_t nm = names.size();
@@ -139,7 +158,7 @@ inline int run_grid(const GridOptions& opt) {
   for (std::size_t c = 0; c < cells.size(); ++c) {
     if (opt.tune) tuned[c] = tune_octomap(cells[c], seeds);
     for (std::size_t s = 0; s < seeds; ++s) {
-      sim::TreeScene scene(cells[c].params(sim::kReportSeeds[s]));
+      sim::TreeScene scene(cells[c].params(scored[s]));
       const auto kfs = scene.keyframes();
       const eval::Reference& ref = scene.reference();
       score_model(kfs, ref, OctoMapModel{}, 0.5, score[c][0]);
@@ -152,7 +171,14 @@ inline int run_grid(const GridOptions& opt) {
       score_model(kfs, ref, Knn2022Model{}, 0.5, score[c][4], -1.0);
       score_model(kfs, ref, Knn2022Model(knn2022_first_pass(kfs, Knn2022Params{}, kGridCrop)), 0.5,
                   score[c][5]);
-      score_model(kfs, ref, RobustModel{}, 0.5, score[c][6]);
+      if (opt.variant == "-witness")
+        score_model(kfs, ref, BasicRobustModel<SeeThroughPerKeyframe>{}, 0.5, score[c][6]);
+      else if (opt.variant == "+through")
+        score_model(kfs, ref, BasicRobustModel<RaysThroughBelieved>{}, 0.5, score[c][6]);
+      else if (opt.variant == "-both")
+        score_model(kfs, ref, BasicRobustModel<PerKeyframeAndThrough>{}, 0.5, score[c][6]);
+      else
+        score_model(kfs, ref, RobustModel{}, 0.5, score[c][6]);
     }
     std::fprintf(stderr, "\rgrid: cell %zu of %zu (%s), %.0f s", c + 1, cells.size(),
                  cells[c].name().c_str(), now() - t0);
@@ -169,9 +195,9 @@ inline int run_grid(const GridOptions& opt) {
     return o > 0 ? 100.0 * double(score[c][m].table1.in_shell) / o : std::nan("");
   };
   auto used = [&](std::size_t m) { return m != 1 || opt.tune; };
-  auto table = [&](const char* title, const char* fmt,
+  auto table = [&](const std::string& title, const char* fmt,
                    const std::function<double(std::size_t, std::size_t)>& value) {
-    std::printf("\n%s\n  %-14s", title, "cell");
+    std::printf("\n%s\n  %-14s", title.c_str(), "cell");
     for (std::size_t m = 0; m < nm; ++m)
       if (used(m)) std::printf(" %9s", names[m].c_str());
     std::printf("\n");
@@ -182,11 +208,12 @@ inline int run_grid(const GridOptions& opt) {
       std::printf("\n");
     }
   };
-  table("irrelevant nodes, % of the OctoMap model's (defaults; sums over the report seeds)",
+  table(std::string("irrelevant nodes, % of the OctoMap model's (defaults; sums over the ") +
+            scored_name + " seeds)",
         " %9.1f", irr_pct);
   table("nodes in reference shell, % of the OctoMap model's", " %9.1f", shell_pct);
-  table("F1, authors' counting (TP/FP/FN summed over the report seeds)", " %9.3f",
-        [&](std::size_t c, std::size_t m) { return score[c][m].counts.f1(); });
+  table(std::string("F1, authors' counting (TP/FP/FN summed over the ") + scored_name + " seeds)",
+        " %9.3f", [&](std::size_t c, std::size_t m) { return score[c][m].counts.f1(); });
   table("MCC, authors' counting", " %9.3f",
         [&](std::size_t c, std::size_t m) { return score[c][m].counts.mcc(); });
   if (opt.tune) {
@@ -199,11 +226,11 @@ inline int run_grid(const GridOptions& opt) {
   }
 
   // Goals and the "no cliff" figure, per model.
-  std::printf("\nsummary (report seeds; the quality goals in brackets)\n");
+  std::printf("\nsummary (%s seeds; the quality goals in brackets)\n", scored_name);
   for (std::size_t m = 1; m < nm; ++m) {
     if (!used(m)) continue;
     std::size_t le10 = 0, le25 = 0, shell97 = 0, above_knn = 0, below_oracle = 0, grid_cells = 0;
-    double worst = 0, worst_shell = 1e9, cliff = 0, mixed_pct = std::nan("");
+    double worst = 0, worst_shell = 1e9, cliff = 0, mixed_pct = std::nan(""), f1_sum = 0;
     std::string cliff_at;
     for (std::size_t c = 0; c < cells.size(); ++c) {
       const double p = irr_pct(c, m), sh = shell_pct(c, m);
@@ -212,6 +239,7 @@ inline int run_grid(const GridOptions& opt) {
         continue;
       }
       ++grid_cells;
+      f1_sum += score[c][m].counts.f1();
       le10 += p <= 10.0;
       le25 += p <= 25.0;
       shell97 += sh >= 97.0;
@@ -235,6 +263,7 @@ inline int run_grid(const GridOptions& opt) {
         names[m].c_str(), le10, grid_cells, le25, worst, above_knn, shell97, worst_shell, mixed_pct,
         cliff, cliff_at.empty() ? "-" : cliff_at.c_str());
     if (opt.tune && m != 1) std::printf("; F1 below octomap* in %zu cells [0]", below_oracle);
+    if (grid_cells > 0) std::printf("; mean F1 %.3f", f1_sum / double(grid_cells));
     std::printf("\n");
   }
 
@@ -250,10 +279,9 @@ inline int run_grid(const GridOptions& opt) {
     const std::string file = names[m] == "octomap*" ? "octomap_oracle" : names[m];
     const std::string path = opt.png_dir + "/grid_" + file + ".png";
     char title[160];
-    std::snprintf(title, sizeof title, "%s%s: sensitivity grid, report seeds %llu-%llu",
-                  names[m].c_str(), m == 1 ? " (oracle-tuned OctoMap)" : "",
-                  (unsigned long long)sim::kReportSeeds[0],
-                  (unsigned long long)sim::kReportSeeds[seeds - 1]);
+    std::snprintf(title, sizeof title, "%s%s: sensitivity grid, %s seeds %llu-%llu",
+                  names[m].c_str(), m == 1 ? " (oracle-tuned OctoMap)" : "", scored_name,
+                  (unsigned long long)scored[0], (unsigned long long)scored[seeds - 1]);
     write_heat_map(path, title, v);
     std::printf("wrote %s\n", path.c_str());
   }

@@ -34,6 +34,20 @@ struct RaysFromOne : RobustRules {
 struct RaysFromTwo : RobustRules {
   static constexpr std::uint32_t ray_detections = 2;
 };
+// See-throughs once per keyframe and voxel, whatever map point the rays end at (the model: each
+// map point a ray ends at counts once per voxel).
+struct SeeThroughPerKeyframe : RobustRules {
+  static constexpr bool witness_once = false;
+};
+// Free rays also through voxels that hold another believed point (the model: not cast).
+struct RaysThroughBelieved : RobustRules {
+  static constexpr bool rays_through_believed = true;
+};
+// Both: the rules before witnesses and uncast rays.
+struct PerKeyframeAndThrough : RobustRules {
+  static constexpr bool witness_once = false;
+  static constexpr bool rays_through_believed = true;
+};
 // Without independent support (the mixture sees every point with none).
 struct WithoutSupport : RobustRules {
   static constexpr bool support_check = false;  // nothing to check
@@ -93,6 +107,9 @@ std::vector<RobustVariant> robust_variants(bool ablate, MapSim map_sim, MapReal 
   add("-seethru", BasicRobustModel<WithoutSeeThrough>{});
   add("rays1", BasicRobustModel<RaysFromOne>{});
   add("rays2", BasicRobustModel<RaysFromTwo>{});
+  add("-witness", BasicRobustModel<SeeThroughPerKeyframe>{});
+  add("+through", BasicRobustModel<RaysThroughBelieved>{});
+  add("-both", BasicRobustModel<PerKeyframeAndThrough>{});
   return v;
 }
 

@@ -1,9 +1,10 @@
 // sensor/robust_model.hpp and sensor/real_point_mixture.hpp: the mixture recovers the rates of a
 // synthetic two-class sample; the model's ledger (views, creator, latest detection, independent
-// support) and see-through counts equal a brute-force recomputation from the keyframes; every map
-// point is believed exactly when its posterior says so, and a voxel whose points are all
-// disbelieved is not occupied; rays from a point's third detection; SLAM evidence reaches the
-// model; dense input without ids is mapped as the OctoMap model maps it.
+// support) and see-through counts (each map point a ray ends at counting once per voxel) equal a
+// brute-force recomputation from the keyframes; every map point is believed exactly when its
+// posterior says so, and a voxel whose points are all disbelieved is not occupied; rays from a
+// point's third detection, none through a voxel holding another believed point; SLAM evidence
+// reaches the model; dense input without ids is mapped as the OctoMap model maps it.
 
 #include <doctest/doctest.h>
 
@@ -213,24 +214,47 @@ TEST_CASE("robust model: its ledger and see-throughs equal a brute-force recompu
         ++b->second.support;
       }
     }
-  // See-throughs per voxel: every keyframe's rays, shortened by its margin, walked voxel by voxel.
+  // See-throughs per voxel: every keyframe's rays, shortened by its margin, walked voxel by voxel;
+  // once a voxel holds a map point (from the keyframe that first detected one there), a keyframe
+  // counts only when one of its rays through the voxel ends at a map point whose rays never
+  // crossed it since.
+  std::map<std::uint64_t, std::uint32_t> holds_from;  // voxel -> first keyframe with a point in it
+  for (const auto& [id, t] : truth) {
+    OcKey k;
+    REQUIRE(grid.point_to_key(detail::to_point3f(t.pos), k));
+    auto [it, fresh] = holds_from.try_emplace(k.pack(), t.first);
+    if (!fresh) it->second = std::min(it->second, t.first);
+  }
   std::map<std::uint64_t, std::uint32_t> passes;
+  std::map<std::uint64_t, std::set<std::uint64_t>> witnesses;  // voxel -> ids whose rays crossed it
   std::vector<OcKey> ray;
-  for (std::size_t t = 0; t < kfs.size(); ++t) {
+  std::size_t repeated = 0;  // keyframes not counted because their witnesses were not new
+  for (std::uint32_t t = 0; t < kfs.size(); ++t) {
     if (radius[t] == 0) continue;
-    std::set<std::uint64_t> crossed;
+    std::map<std::uint64_t, std::set<std::uint64_t>> crossed;  // voxel -> ids of the rays
     const Point3d& o = kfs[t].origin;
-    for (const Point3d& p : kfs[t].points) {
+    for (std::size_t j = 0; j < kfs[t].points.size(); ++j) {
+      const Point3d& p = kfs[t].points[j];
       const double len = std::sqrt((p.x - o.x) * (p.x - o.x) + (p.y - o.y) * (p.y - o.y) +
                                    (p.z - o.z) * (p.z - o.z));
       if (!(len > radius[t])) continue;
       const double f = (len - radius[t]) / len;
       const Point3d stop{o.x + (p.x - o.x) * f, o.y + (p.y - o.y) * f, o.z + (p.z - o.z) * f};
       REQUIRE(compute_ray_keys(grid, detail::to_point3f(o), detail::to_point3f(stop), ray));
-      for (const OcKey& k : ray) crossed.insert(k.pack());
+      for (const OcKey& k : ray) crossed[k.pack()].insert(kfs[t].ids[j]);
     }
-    for (const std::uint64_t k : crossed) ++passes[k];
+    for (const auto& [k, ids] : crossed) {
+      const auto h = holds_from.find(k);
+      bool fresh = h == holds_from.end() || h->second > t;
+      if (!fresh)
+        for (const std::uint64_t id : ids) fresh = witnesses[k].insert(id).second || fresh;
+      if (fresh)
+        ++passes[k];
+      else
+        ++repeated;
+    }
   }
+  CHECK(repeated > 20);  // witnesses are exercised
 
   REQUIRE(model.map_points().size() == truth.size());
   std::size_t seen_through = 0, disbelieved = 0, supported = 0;
@@ -316,6 +340,63 @@ TEST_CASE("robust model: rays from a point's third detection, evidence of eq 13"
   CHECK(*m.map().logodds(crossed) == doctest::Approx(logodds(0.4)));  // the free update
   CHECK(*m.map().logodds(k) == doctest::Approx(3 * logodds(0.65)).epsilon(1e-5));
   CHECK(m.model().map_points().find(42)->views == 3);
+}
+
+namespace {
+// A keyframe ray through a believed point: a wall of map points at x = 1 and one map point, id
+// 9999, at x = 2 straight behind the wall point in the voxel at (1.05, 0.05, 0.05), all detected by
+// `frames` keyframes from the same origin; returns the rays cast by the last keyframe.
+template <class Model>
+std::size_t behind_the_wall(Mapper<Model>& m, std::size_t frames) {
+  std::vector<Point3d> pts;
+  std::vector<std::uint64_t> ids;
+  for (int y = -5; y <= 5; ++y)
+    for (int z = -5; z <= 5; ++z) {
+      pts.push_back({1.05, 0.05 + 0.1 * y, 0.05 + 0.1 * z});
+      ids.push_back(ids.size());
+    }
+  pts.push_back({2.05, 0.05, 0.05});
+  ids.push_back(9999);
+  KeyframeStats ks;
+  const Point3d origin{0.05, 0.05, 0.05};
+  for (std::size_t f = 0; f < frames; ++f) ks = m.insert_keyframe(origin, pts, ids);
+  return ks.rays;
+}
+struct RaysThroughBelieved : RobustRules {
+  static constexpr bool rays_through_believed = true;
+};
+struct SeeThroughPerKeyframe : RobustRules {
+  static constexpr bool witness_once = false;
+};
+}  // namespace
+
+TEST_CASE("robust model: no free ray through a voxel holding another believed point") {
+  Mapper<RobustModel> m(0.1);
+  const std::size_t rays = behind_the_wall(m, 4);
+  const MapPointLedger::Point* wall =
+      m.model().map_points().find(60);  // the one at (1.05, .05, .05)
+  const MapPointLedger::Point* behind = m.model().map_points().find(9999);
+  REQUIRE(wall != nullptr);
+  REQUIRE(behind != nullptr);
+  REQUIRE(wall->believed);
+  REQUIRE(behind->believed);
+  CHECK(rays == 121);  // the wall's rays, not the one through the wall
+  OcKey between;
+  REQUIRE(m.map().grid().coord_to_key(1.55, 0.05, 0.05, between));
+  CHECK_FALSE(m.map().logodds(between).has_value());
+  // The point behind the wall is one witness against the wall point, however often re-detected.
+  CHECK(m.model().counts(*wall).c == 1);
+
+  // The variants: the ray cast and the space behind the wall carved; one see-through a keyframe.
+  Mapper<BasicRobustModel<RaysThroughBelieved>> through(0.1);
+  CHECK(behind_the_wall(through, 4) == 122);
+  REQUIRE(through.map().logodds(between).has_value());
+  CHECK_FALSE(through.map().is_occupied(*through.map().logodds(between)));
+  Mapper<BasicRobustModel<SeeThroughPerKeyframe>> per_keyframe(0.1);
+  behind_the_wall(per_keyframe, 4);
+  const auto* seen = per_keyframe.model().map_points().find(60);
+  REQUIRE(seen != nullptr);
+  CHECK(per_keyframe.model().counts(*seen).c == 4);
 }
 
 TEST_CASE("robust model: one keyframe's endpoints in a voxel add their mean") {

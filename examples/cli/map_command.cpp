@@ -71,16 +71,17 @@ const char* kRobustText =
     R"(  For sparse visual-SLAM keyframes with map-point ids. A map point is believed real while
   P(real) >= 1/2 under a two-class mixture of real structure and wrong matches whose rates are
   estimated from the sequence itself: how often the keyframes that met the point saw through it
-  (a ray crossed its voxel and ended more than --margin-scale mean k-NN distances beyond), how
-  many points of other keyframes lie near it, and the SLAM system's found/visible counts when
-  the clouds carry them (PLY `found`, `visible`, `observations`). The mixture counts only while
-  its wrong class is less supported than its real one (else every point is believed). A
-  believed point adds eq 13's log-odds (from two detections on at least P_w) and casts its ray
-  from its third detection; a point no longer believed takes its evidence back; one keyframe
-  adds the mean of its endpoints in a voxel. Without map-point ids it is OctoMap's model and
-  keeps no map point cloud (the knn line then says map_points 0). Prints the knn line.
-  Where it loses: wrong matches the SLAM system re-detects in every keyframe for 8 keyframes or
-  more look real to it. Rules, constants, measurements: docs/robust_model.md.
+  (a ray crossed its voxel and ended more than --margin-scale mean k-NN distances beyond; each
+  map point a ray ends at counts once per voxel), how many points of other keyframes lie near
+  it, and the SLAM system's found/visible counts when the clouds carry them (PLY `found`,
+  `visible`, `observations`). The mixture counts only while its wrong class is less supported
+  than its real one (else every point is believed). A believed point adds eq 13's log-odds (from
+  two detections on at least P_w) and casts its ray from its third detection, unless the ray
+  crosses a voxel holding another believed point; a point no longer believed takes its evidence
+  back; one keyframe adds the mean of its endpoints in a voxel. Without map-point ids it is
+  OctoMap's model and keeps no map point cloud (the knn line then says map_points 0). Prints the
+  knn line. Where it loses: single wrong matches that a few keyframes re-observe (the k-NN model
+  keeps fewer). Rules, constants, measurements: docs/robust_model.md.
 )";
 
 const char* kKnn2022Text =

@@ -9,7 +9,9 @@
 // (sensor/map_point_ledger.hpp) and per-voxel counts (sensor/voxel_tally.hpp), and its rules are:
 //   - a keyframe sees through a map point when one of its rays crosses the point's voxel and ends
 //     more than margin_scale mean k-NN distances (mu) beyond it; every ray counts, whatever the
-//     model decides about its endpoint, before and after the point appeared;
+//     model decides about its endpoint, before and after the point appeared, but each map point a
+//     ray ends at counts once against a voxel: re-detecting it is not a new look through the voxel
+//     (sensor/voxel_tally.hpp, witnesses);
 //   - a map point is believed real when P(real | its detections, see-throughs, independent support
 //     and SLAM found/visible counts) >= 1/2, under a two-class mixture whose rates are estimated
 //     from all map points of the sequence so far (sensor/real_point_mixture.hpp), one EM step per
@@ -17,8 +19,12 @@
 //   - the mixture is used only while its wrong class is less supported by other keyframes' points
 //     than its real class; otherwise it has found no wrong matches, and every point is believed;
 //   - a believed point's detection adds the paper's eq 13 log-odds of its s (from two detections
-//     on never below P_w) and, from its third detection on, casts a free ray; the first
-//     detection that finds it believed adds its earlier detections' evidence too;
+//     on never below P_w) and, from its third detection on, casts a free ray unless the ray would
+//     cross a voxel holding another believed point: such a ray contradicts believed structure, and
+//     which of the two is wrong is the mixture's to decide from the see-through it counts, not the
+//     ray's to settle by carving (a wrong match re-detected behind a real surface otherwise carves
+//     the surface and the space behind it); the first detection that finds it believed adds its
+//     earlier detections' evidence too;
 //   - one keyframe's endpoints in a voxel add their mean, not their sum (eq 15 bounded), also
 //     when their evidence is added later;
 //   - a point that stops being believed takes its evidence back from its voxel (a voxel left
@@ -82,6 +88,13 @@ struct RobustRules {
   static constexpr std::uint32_t ray_detections = 3;
   /// The mixture is used only while its wrong class is less supported than its real class.
   static constexpr bool support_check = true;
+  /// A map point a ray ends at counts once per voxel it sees through, not once per keyframe that
+  /// re-detects it (no constant; measured against once per keyframe on the tuning seeds' grid,
+  /// docs/robust_model.md).
+  static constexpr bool witness_once = true;
+  /// Free rays that would cross a voxel holding another believed point are cast too (false: not
+  /// cast; measured as witness_once).
+  static constexpr bool rays_through_believed = false;
   /// What the mixture sees of a map point. The SLAM system's count of keyframes observing the
   /// point stands in for the detections when it is larger (keyframes not given to the mapper).
   static PointCounts counts(const MapPointLedger::Point& p, const VoxelTally& tally) {
@@ -162,10 +175,12 @@ class BasicRobustModel {
       const double l = strength(kf.tracker, id, dist, p.views) * (p.believed ? share : p.shares);
       ratings[j] = EndpointRating{static_cast<float>(l), p.views >= Rules::ray_detections};
     }
+    if (kf.has_ids) see_through(kf, ratings);
   }
 
-  /// The contextual hook, after the scan: the evidence added, the keyframe's see-throughs, one EM
-  /// step, and every point's evidence put in or taken back accordingly.
+  /// The contextual hook, after the scan: the evidence added, one EM step (with the keyframe's
+  /// see-throughs, counted before the scan), and every point's evidence put in or taken back
+  /// accordingly.
   template <class Key, class Tracker>
   void settle_keyframe(const KeyframeView<Key, Tracker>& kf,
                        const std::vector<EndpointRating>& ratings, OccupancyMap<Key>& map) {
@@ -176,17 +191,6 @@ class BasicRobustModel {
       p.added += ratings[j].logodds;
       set_believed(p, true);
     }
-    const RunningNormal& dist = kf.tracker.distribution();
-    if (dist.count() > 0)  // the margin needs a scale
-      tally_.add_keyframe(
-          kf.map.grid(), kf.origin, kf.points, params_.margin_scale * dist.mean(),
-          static_cast<std::uint32_t>(kf.index),
-          [&](std::size_t j) { return kf.ids[j] != KeyframeUnion::kNoId; },
-          [&](std::uint32_t slot) {
-            for (std::uint32_t i = tally_.at(slot).first_point; i != MapPointLedger::kNone;
-                 i = ledger_.at(i).next_in_voxel)
-              touch(i, kf.index);
-          });
     // The points whose counts changed move to their new bins; then one EM step.
     for (const std::uint32_t i : touched_) {
       MapPointLedger::Point& p = ledger_.at(i);
@@ -196,6 +200,7 @@ class BasicRobustModel {
     touched_.clear();
     mixture_.step();
     mixture_.refresh();
+    const RunningNormal& dist = kf.tracker.distribution();
     const bool found = wrong_class_found();
     ledger_.for_each([&](std::uint64_t id, MapPointLedger::Point& p) {
       const bool real = !found || mixture_.bin_log_odds(p.bin) >= 0.0;
@@ -212,6 +217,34 @@ class BasicRobustModel {
   }
 
  private:
+  // The keyframe's see-throughs (sensor/voxel_tally.hpp; with witnesses unless a variant turns them
+  // off), before its scan: a ray that crosses a voxel holding a believed point other than its own
+  // endpoint's is not cast (see the rules above).
+  template <class Key, class Tracker>
+  void see_through(const KeyframeView<Key, Tracker>& kf, std::vector<EndpointRating>& ratings) {
+    const RunningNormal& dist = kf.tracker.distribution();
+    if (dist.count() == 0) return;  // the margin needs a scale
+    crosses_.assign(kf.points.size(), 0);
+    tally_.add_keyframe(
+        kf.map.grid(), kf.origin, kf.points, params_.margin_scale * dist.mean(),
+        static_cast<std::uint32_t>(kf.index),
+        [&](std::size_t j) { return kf.ids[j] != KeyframeUnion::kNoId; },
+        [&](std::size_t j) { return Rules::witness_once ? index_[j] : MapPointLedger::kNone; },
+        [&](std::uint32_t slot) {
+          for (std::uint32_t i = tally_.at(slot).first_point; i != MapPointLedger::kNone;
+               i = ledger_.at(i).next_in_voxel)
+            touch(i, kf.index);
+        },
+        [&](std::size_t j, std::uint32_t slot) {
+          if (tally_.at(slot).believed > 0 && index_[j] != MapPointLedger::kNone &&
+              ledger_.at(index_[j]).voxel != slot)
+            crosses_[j] = 1;
+        });
+    if (Rules::rays_through_believed) return;
+    for (std::size_t j = 0; j < kf.points.size(); ++j)
+      if (crosses_[j]) ratings[j].casts_ray = false;
+  }
+
   // Detection j of the keyframe in the ledger; a new point gets its voxel and its independent
   // support: the map points within margin_scale * mu (the see-through margin: one scale for
   // "near") that other keyframes created, each of which counts the new point too.
@@ -324,7 +357,8 @@ class BasicRobustModel {
   // Per keyframe (kept for their memory).
   std::vector<std::uint64_t> keys_;  // each endpoint's voxel (Key::pack(), kEmpty: none)
   std::vector<std::uint32_t> in_voxel_, voxel_count_, near_, touched_;
-  std::vector<std::uint32_t> index_;  // each endpoint's ledger index (kNone: not rated by it)
+  std::vector<std::uint32_t> index_;   // each endpoint's ledger index (kNone: not rated by it)
+  std::vector<std::uint8_t> crosses_;  // each ray crosses a voxel holding another believed point
   detail::FlatIndex voxels_;
 };
 

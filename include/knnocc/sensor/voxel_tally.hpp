@@ -7,6 +7,12 @@
 // the voxel (OctoMap's DDA, end voxel excluded; raycast/dda.hpp): the ray went on to end more than
 // `margin` beyond the voxel. Each keyframe counts once per voxel. The margin keeps a ray that ends
 // on the same surface, a little behind a point, from counting against it.
+// With witnesses (the map point each ray ends at), a voxel that holds map points counts a
+// keyframe's see-through only when one of its rays through the voxel ends at a map point that has
+// not seen through the voxel before: a point that keyframe after keyframe re-detects is one
+// witness against what lies in front of it, not one per keyframe (its re-detections are the same
+// match, not independent looks; a wrong match re-detected behind a real surface otherwise makes
+// the surface look seen through as often as the match is re-detected).
 //
 // Storage: see-throughs in bricks of 8x8x8 voxels found by packed brick key (a ray's consecutive
 // voxels mostly share a brick, so a walk looks up about one brick per eight voxels); voxels that
@@ -72,12 +78,24 @@ class VoxelTally {
   void add_keyframe(const Grid<Key>& grid, const Point3d& origin,
                     const std::vector<Point3d>& points, double margin, std::uint32_t keyframe,
                     Use&& use, OnPass&& on_pass) {
+    add_keyframe(
+        grid, origin, points, margin, keyframe, use, [](std::size_t) { return kNone; }, on_pass,
+        [](std::size_t, std::uint32_t) {});
+  }
+  /// The same with witnesses: witness(j) is the map point ray j ends at (an index below kNone),
+  /// or kNone for a ray that counts as before; and on_cross(j, slot) for every voxel with a cell
+  /// that ray j crosses (counted or not).
+  template <class Key, class Use, class Witness, class OnPass, class OnCross>
+  void add_keyframe(const Grid<Key>& grid, const Point3d& origin,
+                    const std::vector<Point3d>& points, double margin, std::uint32_t keyframe,
+                    Use&& use, Witness&& witness, OnPass&& on_pass, OnCross&& on_cross) {
     const Point3f o = detail::to_point3f(origin);
     const std::uint32_t stamp = keyframe + 1;
     std::uint64_t last_brick = ~std::uint64_t{0};
     std::uint32_t base = 0;
     for (std::size_t j = 0; j < points.size(); ++j) {
       if (!use(j)) continue;
+      const std::uint32_t w = witness(j);
       const Point3d& p = points[j];
       const double ux = p.x - origin.x, uy = p.y - origin.y, uz = p.z - origin.z;
       const double len = std::sqrt(ux * ux + uy * uy + uz * uz);
@@ -92,6 +110,12 @@ class VoxelTally {
           last_brick = bk;
         }
         Pass& q = passes_[base + local(k)];
+        if (q.cell != kNone) on_cross(j, q.cell);
+        if (q.cell != kNone && w != kNone) {  // a witness counts once per voxel
+          bool fresh = false;
+          witnesses_.find_or_insert(std::uint64_t{q.cell} << 32 | w, 0, fresh);
+          if (!fresh) return;
+        }
         if (q.stamp == stamp) return;
         q.stamp = stamp;
         ++q.passes;
@@ -104,7 +128,7 @@ class VoxelTally {
   std::size_t size() const { return cells_.size(); }
   std::size_t memory_usage() const {
     return bricks_.memory_usage() + passes_.capacity() * sizeof(Pass) +
-           cells_.capacity() * sizeof(Cell);
+           cells_.capacity() * sizeof(Cell) + witnesses_.memory_usage();
   }
 
  private:
@@ -139,6 +163,7 @@ class VoxelTally {
   detail::FlatIndex bricks_;  // packed brick key -> brick number (its Pass block in passes_)
   std::vector<Pass> passes_;
   std::vector<Cell> cells_;
+  detail::FlatIndex witnesses_;  // (cell << 32 | witness) pairs seen (add_keyframe)
 };
 
 }  // namespace knnocc

@@ -23,8 +23,9 @@
 //     cross a voxel holding another believed point: such a ray contradicts believed structure, and
 //     which of the two is wrong is the mixture's to decide from the see-through it counts, not the
 //     ray's to settle by carving (a wrong match re-detected behind a real surface otherwise carves
-//     the surface and the space behind it); the first detection that finds it believed adds its
-//     earlier detections' evidence too;
+//     the surface and the space behind it); while the mixture has found no wrong class there is
+//     nothing to decide and every such ray is cast; the first detection that finds it believed
+//     adds its earlier detections' evidence too;
 //   - one keyframe's endpoints in a voxel add their mean, not their sum (eq 15 bounded), also
 //     when their evidence is added later;
 //   - a point that stops being believed takes its evidence back from its voxel (a voxel left
@@ -240,7 +241,8 @@ class BasicRobustModel {
               ledger_.at(index_[j]).voxel != slot)
             crosses_[j] = 1;
         });
-    if (Rules::rays_through_believed) return;
+    // Without a wrong class there is nothing for the mixture to decide: every ray is cast.
+    if (Rules::rays_through_believed || !wrong_class_found()) return;
     for (std::size_t j = 0; j < kf.points.size(); ++j)
       if (crosses_[j]) ratings[j].casts_ray = false;
   }

@@ -49,6 +49,7 @@
 
 #include "bench_common.hpp"
 #include "quality_grid.hpp"
+#include "regime_changes.hpp"
 #include "robust_variants.hpp"
 
 using namespace knnocc;
@@ -340,13 +341,7 @@ int main(int argc, char** argv) {
     std::vector<Totals> rob(vars.size());
     double seen_once = 0;
     for (int s = first_seed; s < first_seed + seeds; ++s) {
-      sim::TreeSceneParams p = regime.params;
-      p.seed = static_cast<std::uint64_t>(s);
-      if (repeat >= 0 && p.outlier_repeat > 0) p.outlier_repeat = static_cast<std::size_t>(repeat);
-      if (cluster >= 1 && p.outlier_cluster > 1)
-        p.outlier_cluster = static_cast<std::size_t>(cluster);
-      if (repeat_prob >= 0 && p.outlier_repeat > 0) p.repeat_prob = repeat_prob;
-      sim::TreeScene scene(p);
+      sim::TreeScene scene(bench::changed_params(regime, s, {repeat, cluster, repeat_prob}));
       const auto kfs = scene.keyframes();
       eval::MapPointViews views;
       std::vector<Point3d> w;

@@ -25,6 +25,8 @@
 #include <knnocc/sim/regimes.hpp>
 #include <knnocc/sim/tree_scene.hpp>
 
+#include "regime_changes.hpp"
+
 using namespace knnocc;
 
 namespace {
@@ -74,13 +76,7 @@ void simulated(const sim::Regime& regime, int first, int seeds, int repeat, int 
   std::printf("\nregime %s\n", regime.name.c_str());
   Kind real, wrong, irrelevant;
   for (int s = first; s < first + seeds; ++s) {
-    sim::TreeSceneParams p = regime.params;
-    p.seed = static_cast<std::uint64_t>(s);
-    if (repeat >= 0 && p.outlier_repeat > 0) p.outlier_repeat = static_cast<std::size_t>(repeat);
-    if (cluster >= 1 && p.outlier_cluster > 1)
-      p.outlier_cluster = static_cast<std::size_t>(cluster);
-    if (repeat_prob >= 0 && p.outlier_repeat > 0) p.repeat_prob = repeat_prob;
-    sim::TreeScene scene(p);
+    sim::TreeScene scene(bench::changed_params(regime, s, {repeat, cluster, repeat_prob}));
     Mapper<RobustModel> mapper(0.1);
     sim::map_keyframes(mapper, scene.keyframes(), 4.0);
     const RobustModel& m = mapper.model();

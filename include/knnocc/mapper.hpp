@@ -283,8 +283,7 @@ class Mapper {
 
  private:
   static const MapperOptions& checked(const MapperOptions& o) {
-    if (o.max_range == 0.0 || std::isnan(o.max_range))
-      detail::invalid_argument("max_range must be > 0, or < 0 for no limit");
+    detail::check_max_range(o.max_range);
     if (o.threads < 1) detail::invalid_argument("threads must be >= 1");
     if ((uses_map_cloud || rates_cloud) && o.discretize)
       detail::invalid_argument("discretize applies to the OctoMap model only");

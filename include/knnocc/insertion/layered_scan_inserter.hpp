@@ -62,8 +62,7 @@ class LayeredScanInserter {
   ScanStats insert_layered(const Origin& origin, const Points& points,
                            const std::vector<LayeredRating>& ratings, const RayLayers& layers,
                            double max_range = -1.0) {
-    if (max_range == 0.0 || std::isnan(max_range))
-      detail::invalid_argument("max_range must be > 0, or < 0 for no limit");
+    detail::check_max_range(max_range);
     const auto n = static_cast<std::size_t>(std::distance(std::begin(points), std::end(points)));
     if (n != ratings.size())
       detail::invalid_argument("insert_layered: one rating per point expected");

@@ -149,7 +149,7 @@ class ScanInserter {
   template <class Points, class Origin>
   ScanStats insert_point_cloud(const Origin& origin, const Points& points, double max_range = -1.0,
                                bool discretize = false) {
-    check_max_range(max_range);
+    detail::check_max_range(max_range);
     ScanStats st;
     const Point3f o = detail::to_point3f(origin);
     if (!detail::finite(o)) {
@@ -178,7 +178,7 @@ class ScanInserter {
   template <class Points, class Origin>
   ScanStats insert_rated(const Origin& origin, const Points& points,
                          const std::vector<EndpointRating>& ratings, double max_range = -1.0) {
-    check_max_range(max_range);
+    detail::check_max_range(max_range);
     const auto n = static_cast<std::size_t>(std::distance(std::begin(points), std::end(points)));
     if (n != ratings.size())
       detail::invalid_argument("insert_rated: one rating per point expected");
@@ -206,10 +206,6 @@ class ScanInserter {
   // Scans of fewer points are collected (and bounded) on one thread: waking the others costs more.
   static constexpr std::size_t kThreadedPoints = 2 * chunk_points;
 
-  static void check_max_range(double max_range) {
-    if (max_range == 0.0 || std::isnan(max_range))
-      detail::invalid_argument("max_range must be > 0, or < 0 for no limit");
-  }
   static void add_counts(const detail::PointCounts& c, ScanStats& st) {
     st.points += c.points;
     st.nonfinite += c.nonfinite;

@@ -25,6 +25,7 @@
 #include <limits>
 #include <vector>
 
+#include "../core/config.hpp"
 #include "../core/grid.hpp"
 #include "../core/point3.hpp"
 
@@ -40,6 +41,12 @@ inline double octomap_norm(float dx, float dy, float dz) {
 
 inline bool finite(const Point3f& p) {
   return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
+
+/// OctoMap's max_range: > 0 a limit, < 0 none; 0 and NaN are refused (std::invalid_argument).
+inline void check_max_range(double max_range) {
+  if (max_range == 0.0 || std::isnan(max_range))
+    invalid_argument("max_range must be > 0, or < 0 for no limit");
 }
 
 }  // namespace detail

@@ -215,10 +215,15 @@ void real_ids(const std::string& dir, double res, double crop,
   row("knn", q, knn_ms, extra);
   const double k22_ms = run_knn2022(seq, res, measure);
   row("knn2022", q, k22_ms, extra);
+  double robust_ms = 0;
   for (const bench::RobustVariant& v : vars) {
     const double ms = v.real(seq, res, crop, measure);
     row(v.name.c_str(), q, ms, extra);
+    if (v.name == "robust") robust_ms = ms;
   }
+  if (robust_ms > 0 && knn_ms > 0)
+    std::printf("  robust / knn time per keyframe: %.2f (goal, stereo set only: <= 2)\n",
+                robust_ms / knn_ms);
 }
 
 // Dense depth clouds (TUM fr2/pioneer_slam2, 0.05 m, no ids): each model's occupied voxels as a

@@ -1,5 +1,6 @@
 // sensor/map_point_ledger.hpp and sensor/voxel_tally.hpp: views once per keyframe, first position
-// kept, stable indices; see-throughs per voxel against a brute-force walk of every shortened ray.
+// kept, stable indices; see-throughs per voxel against a brute-force walk of every shortened ray,
+// and the dense walk against the ray-by-ray walk.
 
 #include <doctest/doctest.h>
 
@@ -7,6 +8,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <tuple>
 #include <vector>
 
 #include <knnocc/map/occupancy_map.hpp>
@@ -114,4 +116,53 @@ TEST_CASE("voxel tally: see-throughs equal a brute-force walk, each keyframe onc
   REQUIRE(map.grid().coord_to_key(50.0, 50.0, 50.0, far));
   CHECK(tally.passes(far) == 0);
   CHECK(tally.find(far) == VoxelTally::kNone);
+}
+
+TEST_CASE(
+    "voxel tally: the dense walk counts as the ray-by-ray walk, crossings in the same order") {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  const Grid<OcKey> grid(0.1);
+  VoxelTally dense, hashed;
+  hashed.set_dense_walk(false);
+  for (int i = 0; i < 400; ++i) {  // cells where the rays pass, so that many rays cross some
+    OcKey k;
+    REQUIRE(grid.coord_to_key(u(rng), u(rng), 0.6 + u(rng) * 0.3, k));
+    CHECK(dense.slot(k) == hashed.slot(k));
+  }
+  // (keyframe, ray, cell) of every on_cross and (keyframe, cell) of every on_pass, in call order.
+  using Calls = std::vector<std::tuple<std::uint32_t, std::size_t, std::uint32_t>>;
+  Calls dense_calls, hashed_calls;
+  std::set<std::uint64_t> reached;
+  std::size_t crossings = 0;
+  for (std::uint32_t kf = 0; kf < 16; ++kf) {
+    const Point3d origin{u(rng) * 0.3, u(rng) * 0.3, 0.0};
+    std::vector<Point3d> pts;
+    for (int j = 0; j < 120; ++j) pts.push_back({u(rng), u(rng), u(rng) * 0.2 + 1.2});
+    if (kf == 5) pts.push_back({3000.0, 0.0, 1.0});  // a box too large: the hashed walk for both
+    std::vector<std::uint32_t> witness(pts.size());
+    for (std::size_t j = 0; j < pts.size(); ++j)  // repeated witnesses, some rays without one
+      witness[j] = j % 5 == 0 ? VoxelTally::kNone : static_cast<std::uint32_t>(j % 37);
+    auto run = [&](VoxelTally& t, Calls& calls) {
+      t.add_keyframe(
+          grid, origin, pts, 0.15, kf, [](std::size_t j) { return j % 11 != 4; },
+          [&](std::size_t j) { return witness[j]; },
+          [&](std::uint32_t slot) { calls.emplace_back(kf, ~std::size_t{0}, slot); },
+          [&](std::size_t j, std::uint32_t slot) { calls.emplace_back(kf, j, slot); });
+    };
+    run(dense, dense_calls);
+    run(hashed, hashed_calls);
+    for (const Point3d& p : pts) {
+      std::vector<OcKey> keys;
+      if (compute_ray_keys(grid, detail::to_point3f(origin), detail::to_point3f(p), keys))
+        for (const OcKey& k : keys) reached.insert(k.pack());
+    }
+  }
+  for (const auto& c : hashed_calls) crossings += std::get<1>(c) != ~std::size_t{0};
+  CHECK(crossings > 200);  // rays cross cells, often more than one
+  CHECK(dense_calls == hashed_calls);
+  for (const std::uint64_t k : reached)
+    CHECK(dense.passes(OcKey::unpack(k)) == hashed.passes(OcKey::unpack(k)));
+  for (std::uint32_t s = 0; s < dense.size(); ++s) CHECK(dense.passes_at(s) == hashed.passes_at(s));
+  CHECK(dense.memory_usage() > hashed.memory_usage());  // the dense walk ran (its scratch is kept)
 }

@@ -1,5 +1,5 @@
 // sensor/robust_model.hpp and sensor/real_point_mixture.hpp: the mixture recovers the rates of a
-// synthetic two-class sample; the model's ledger (views, creator, latest detection, independent
+// synthetic two-class sample, and its EM step equals its formulas summed point by point; the model's ledger (views, creator, latest detection, independent
 // support) and see-through counts (each map point a ray ends at counting once per voxel) equal a
 // brute-force recomputation from the keyframes; every map point is believed exactly when its
 // posterior says so, and a voxel whose points are all disbelieved is not occupied; rays from a
@@ -99,6 +99,40 @@ TEST_CASE("robust mixture: recovers the rates of a two-class sample and classifi
     const double now = step.log_likelihood();
     CHECK(now >= before - 1e-9 * std::fabs(before));
     before = now;
+  }
+}
+
+TEST_CASE("robust mixture: each EM step is the update its formulas give, point by point") {
+  // Points far on the real side (P(real) exactly 1, which step() sums without exp) and all others.
+  const Sample s = make_sample(9, 3000, true);
+  RealPointMixture m;
+  for (const PointCounts& k : s.counts) m.add(k);
+  for (int i = 0; i < 8; ++i) m.step();
+  for (int round = 0; round < 5; ++round) {
+    const RealPointRates before = m.rates();
+    double n = 0, w = 0, w_n = 0, w_c = 0, v_n = 0, v_c = 0, w_u = 0, v_u = 0, w_f = 0, w_v = 0,
+           v_f = 0, v_v = 0;
+    std::size_t certain = 0;
+    for (const PointCounts& k : s.counts) {
+      const double l = m.log_odds(k), p = 1.0 / (1.0 + std::exp(-l)), q = 1.0 - p;
+      certain += l >= 37.0;
+      const double met = double(k.d) + k.c;
+      n += 1, w += p, w_n += p * met, w_c += p * k.c, v_n += q * met, v_c += q * k.c;
+      w_u += p * k.u, v_u += q * k.u, w_f += p * k.f, w_v += p * k.v, v_f += q * k.f,
+          v_v += q * k.v;
+    }
+    CHECK(certain > 100);
+    CHECK(certain < s.counts.size() - 100);
+    m.step();
+    const RealPointRates& r = m.rates();
+    REQUIRE(before.e_real < before.e_wrong);
+    CHECK(r.prior == doctest::Approx((w + 1) / (n + 2)).epsilon(1e-12));
+    CHECK(r.e_real == doctest::Approx((w_c + 1) / (w_n + 2)).epsilon(1e-12));
+    CHECK(r.e_wrong == doctest::Approx((v_c + 1) / (v_n + 2)).epsilon(1e-12));
+    CHECK(r.u_real == doctest::Approx((w_u + 1) / (w + 1)).epsilon(1e-12));
+    CHECK(r.u_wrong == doctest::Approx((v_u + 1) / (n - w + 1)).epsilon(1e-12));
+    CHECK(r.f_real == doctest::Approx((w_f + 1) / (w_v + 2)).epsilon(1e-12));
+    CHECK(r.f_wrong == doctest::Approx((v_f + 1) / (v_v + 2)).epsilon(1e-12));
   }
 }
 

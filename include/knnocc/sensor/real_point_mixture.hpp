@@ -149,8 +149,16 @@ class RealPointMixture {
   /// One expectation-maximisation step from the current estimate.
   void step() {
     Sums s;
-    for (const Bin& b : bins_)
-      if (b.points > 0) s.add(b, 1.0 / (1.0 + std::exp(-log_odds(b.k))));
+    for (const Bin& b : bins_) {
+      if (b.points == 0) continue;
+      // From log-odds 37 on P(real) is 1 in double (e^-37 is below half an ulp of 1): most bins
+      // of a sequence are there, and take neither exp nor the wrong class's sums.
+      const double l = log_odds(b.k);
+      if (l >= 37.0)
+        s.add_real(b);
+      else
+        s.add(b, 1.0 / (1.0 + std::exp(-l)));
+    }
     if (s.all == 0) return;
     const double wrong = s.all - s.w;
     r_.prior = (s.w + 1) / (s.all + 2);
@@ -231,6 +239,22 @@ class RealPointMixture {
         v_m += m * q;
         w_g += m * p * b.k.g;
         v_g += m * q * b.k.g;
+      }
+    }
+    // add(b, 1) to the last bit: each product with p = 1 is the product without it, and the
+    // wrong class's terms (products with q = 0) add +0.
+    void add_real(const Bin& b) {
+      const double m = b.points, n = static_cast<double>(b.k.d) + b.k.c;
+      all += m;
+      w += m;
+      w_n += m * n;
+      w_c += m * b.k.c;
+      w_u += m * b.k.u;
+      w_f += m * b.k.f;
+      w_v += m * b.k.v;
+      if (b.k.d >= 2) {
+        w_m += m;
+        w_g += m * b.k.g;
       }
     }
   };

@@ -14,22 +14,38 @@
 // match, not independent looks; a wrong match re-detected behind a real surface otherwise makes
 // the surface look seen through as often as the match is re-detected).
 //
-// Storage: see-throughs in bricks of 8x8x8 voxels found by packed brick key (a ray's consecutive
-// voxels mostly share a brick, so a walk looks up about one brick per eight voxels); voxels that
-// hold map points also get a cell (believed count, the list of their points) whose slot never
-// moves, so a map point reads its voxel's counts without a lookup.
+// Storage: see-throughs in bricks of 8x8x8 voxels found by packed brick key; voxels that hold map
+// points also get a cell (believed count, the list of their points) whose slot never moves, so a
+// map point reads its voxel's counts without a lookup.
+//
+// Walks: a keyframe's rays go into a dense bitmap of their box on the scan inserter's vector walks
+// (raycast/detail/fan_walk.hpp: exactly walk_ray()'s voxels), and each voxel of the bitmap adds
+// its pass a brick at a time. The rays that may cross a cell the bitmap holds (by their distance
+// to it) are walked again one at a time, each up to the farthest such cell, so that witnesses and
+// on_cross() meet each ray's cells in the order of a ray-by-ray walk. A box the bitmap does not
+// suit (too large for its rays, or at the edge of the key range) takes the ray-by-ray walk on
+// hashed bricks; both count alike (tests compare them).
 //
 // Thread safety: one writer.
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "../core/detail/flat_index.hpp"
 #include "../core/grid.hpp"
 #include "../core/point3.hpp"
+#include "../insertion/detail/dense_box.hpp"
+#include "../insertion/detail/scan_bitmap.hpp"
+#include "../map/brick.hpp"
 #include "../raycast/dda.hpp"
+#include "../raycast/detail/fan_walk.hpp"
 
 namespace knnocc {
 
@@ -90,48 +106,295 @@ class VoxelTally {
                     const std::vector<Point3d>& points, double margin, std::uint32_t keyframe,
                     Use&& use, Witness&& witness, OnPass&& on_pass, OnCross&& on_cross) {
     const Point3f o = detail::to_point3f(origin);
-    const std::uint32_t stamp = keyframe + 1;
-    std::uint64_t last_brick = ~std::uint64_t{0};
-    std::uint32_t base = 0;
+    stops_.clear();
     for (std::size_t j = 0; j < points.size(); ++j) {
       if (!use(j)) continue;
-      const std::uint32_t w = witness(j);
       const Point3d& p = points[j];
       const double ux = p.x - origin.x, uy = p.y - origin.y, uz = p.z - origin.z;
       const double len = std::sqrt(ux * ux + uy * uy + uz * uz);
       if (!(len > margin)) continue;
       const double f = (len - margin) / len;
-      const Point3f stop =
-          detail::to_point3f(Point3d{origin.x + ux * f, origin.y + uy * f, origin.z + uz * f});
-      for_each_ray_key(grid, o, stop, [&](const Key& k) {
+      stops_.push_back(Stop{j, detail::to_point3f(Point3d{origin.x + ux * f, origin.y + uy * f,
+                                                          origin.z + uz * f})});
+    }
+    const std::uint32_t stamp = keyframe + 1;
+    if (dense_walk_ && walk_dense(grid, o, stamp, witness, on_pass, on_cross)) return;
+    walk_hashed(grid, o, stamp, witness, on_pass, on_cross);
+  }
+
+  /// Whether add_keyframe may walk a keyframe's rays into a dense bitmap (the default) or walks
+  /// every ray on hashed bricks (tests compare the two).
+  void set_dense_walk(bool on) { dense_walk_ = on; }
+
+  /// Voxels with a cell.
+  std::size_t size() const { return cells_.size(); }
+  std::size_t memory_usage() const {
+    return bricks_.memory_usage() + passes_.capacity() * sizeof(Pass) +
+           cells_.capacity() * sizeof(Cell) + witnesses_.memory_usage() +
+           stops_.capacity() * sizeof(Stop) + scratch_.memory_usage();
+  }
+
+ private:
+  // A ray to walk: its point's index and its end, shortened by the margin.
+  struct Stop {
+    std::size_t j;
+    Point3f end;
+  };
+  // Ray j crosses a cell at its step-th voxel.
+  struct Crossing {
+    std::size_t j;
+    std::uint32_t step, cell;
+  };
+  // A cell the keyframe's rays reached: its voxel, the step at which a walk could stand on it
+  // (its L1 key distance from the origin's voxel) and its centre.
+  struct SeenCell {
+    std::uint32_t cell, step;
+    std::uint64_t packed;
+    Point3d centre;
+  };
+  // The dense walk's scratch, kept between keyframes for its memory; a copy starts empty.
+  struct Scratch {
+    detail::ScanBitmap seen;
+    std::unique_ptr<detail::RayBlock> block;
+    std::vector<detail::RayEnd> ends;    // the rays that leave the origin's voxel
+    std::vector<std::uint32_t> stop_of;  // ends[i] is stops_[stop_of[i]]
+    std::vector<VoxelMask> masks;
+    std::vector<SeenCell> cells;
+    std::vector<const SeenCell*> near;  // the cells a ray may cross
+    std::vector<Crossing> crossings;
+
+    Scratch() = default;
+    Scratch(const Scratch&) : Scratch() {}
+    Scratch& operator=(const Scratch&) { return *this; }
+    Scratch(Scratch&&) = default;
+    Scratch& operator=(Scratch&&) = default;
+    ~Scratch() = default;
+    std::size_t memory_usage() const {
+      return seen.capacity_bytes() + (block ? sizeof(detail::RayBlock) : 0) +
+             ends.capacity() * sizeof(detail::RayEnd) +
+             stop_of.capacity() * sizeof(std::uint32_t) + masks.capacity() * sizeof(VoxelMask) +
+             cells.capacity() * sizeof(SeenCell) + near.capacity() * sizeof(SeenCell*) +
+             crossings.capacity() * sizeof(Crossing);
+    }
+  };
+  // Bytes of dense scratch a keyframe may take (detail::plan_dense_box: its bitmap up to half);
+  // larger boxes take the hashed walk.
+  static constexpr std::size_t kScratchLimit = std::size_t{8} << 20;
+
+  // Ray j crosses cell `cell`: on_cross, then a pass unless the ray's witness has seen through
+  // the voxel before or the keyframe has passed it already.
+  template <class Witness, class OnPass, class OnCross>
+  void cross_cell(std::size_t j, std::uint32_t cell, std::uint32_t stamp, Witness& witness,
+                  OnPass& on_pass, OnCross& on_cross) {
+    on_cross(j, cell);
+    const std::uint32_t w = witness(j);
+    if (w != kNone) {  // a witness counts once per voxel
+      bool fresh = false;
+      witnesses_.find_or_insert(std::uint64_t{cell} << 32 | w, 0, fresh);
+      if (!fresh) return;
+    }
+    Pass& q = passes_[cells_[cell].pass];
+    if (q.stamp == stamp) return;
+    q.stamp = stamp;
+    ++q.passes;
+    on_pass(cell);
+  }
+
+  // Every ray, one at a time, on hashed bricks.
+  template <class Key, class Witness, class OnPass, class OnCross>
+  void walk_hashed(const Grid<Key>& grid, const Point3f& o, std::uint32_t stamp,
+                   Witness& witness, OnPass& on_pass, OnCross& on_cross) {
+    std::uint64_t last_brick = ~std::uint64_t{0};
+    std::uint32_t base = 0;
+    for (const Stop& s : stops_)
+      for_each_ray_key(grid, o, s.end, [&](const Key& k) {
         const std::uint64_t bk = brick_key(k);
         if (bk != last_brick) {
           base = brick(bk) * kBrickVoxels;
           last_brick = bk;
         }
         Pass& q = passes_[base + local(k)];
-        if (q.cell != kNone) on_cross(j, q.cell);
-        if (q.cell != kNone && w != kNone) {  // a witness counts once per voxel
-          bool fresh = false;
-          witnesses_.find_or_insert(std::uint64_t{q.cell} << 32 | w, 0, fresh);
-          if (!fresh) return;
+        if (q.cell != kNone) {
+          cross_cell(s.j, q.cell, stamp, witness, on_pass, on_cross);
+          return;
         }
         if (q.stamp == stamp) return;
         q.stamp = stamp;
         ++q.passes;
-        if (q.cell != kNone) on_pass(q.cell);
       });
+  }
+
+  // The rays into a dense bitmap of their box, a pass for each voxel of it, then the cells'
+  // crossings ray by ray; false (nothing counted) when the box does not suit a bitmap.
+  template <class Key, class Witness, class OnPass, class OnCross>
+  bool walk_dense(const Grid<Key>& grid, const Point3f& o, std::uint32_t stamp, Witness& witness,
+                  OnPass& on_pass, OnCross& on_cross) {
+    Key ko;
+    if (!grid.point_to_key(o, ko)) return false;
+    const std::optional<detail::DenseBox> box = plan_box(grid, ko);
+    if (!box) return false;
+    if (scratch_.ends.empty()) return true;
+    detail::ScanBitmap& seen = scratch_.seen;
+    seen.reshape(box->lo, box->size, false);
+    const std::int32_t kof[3] = {ko[0], ko[1], ko[2]};
+    const detail::RayFan fan(grid, o, kof, box->lo,
+                             {seen.stride(0), seen.stride(1), seen.stride(2)});
+    if (!scratch_.block) scratch_.block = std::make_unique<detail::RayBlock>();
+    bool handed = false;
+    auto more = [&](const detail::RayEnd*& pos, const detail::RayEnd*& end) {
+      if (handed) return false;
+      handed = true;
+      pos = scratch_.ends.data();
+      end = pos + scratch_.ends.size();
+      return true;
+    };
+    detail::walk_fan(detail::best_walk_path<detail::BitMarks>(), grid, fan, *scratch_.block, more,
+                     detail::BitMarks{seen.words()});
+    count_seen<Key>();
+    cross_cells(grid, o, ko, stamp, witness, on_pass, on_cross);
+    return true;
+  }
+
+  // The dense box of the rays that leave the origin's voxel `ko` (into scratch_.ends), or nullopt
+  // when a ray ends outside the key range or the box does not suit a bitmap.
+  template <class Key>
+  std::optional<detail::DenseBox> plan_box(const Grid<Key>& grid, const Key& ko) {
+    detail::KeyBox keys;
+    for (int a = 0; a < 3; ++a) keys.lo[a] = keys.hi[a] = ko[a];
+    scratch_.ends.clear();
+    scratch_.stop_of.clear();
+    std::size_t steps = 0;
+    for (std::size_t i = 0; i < stops_.size(); ++i) {
+      Key ke;
+      if (!grid.point_to_key(stops_[i].end, ke)) return std::nullopt;
+      if (ke == ko) continue;  // a ray within one voxel visits none
+      const std::int64_t k[3] = {ke[0], ke[1], ke[2]};
+      keys.extend(k);
+      for (int a = 0; a < 3; ++a) steps += static_cast<std::size_t>(std::llabs(k[a] - ko[a]));
+      scratch_.ends.push_back(detail::RayEnd{stops_[i].end, {ke[0], ke[1], ke[2]}});
+      scratch_.stop_of.push_back(static_cast<std::uint32_t>(i));
     }
+    return detail::plan_dense_box<Key>(keys, steps, kScratchLimit, 1);
   }
 
-  /// Voxels with a cell.
-  std::size_t size() const { return cells_.size(); }
-  std::size_t memory_usage() const {
-    return bricks_.memory_usage() + passes_.capacity() * sizeof(Pass) +
-           cells_.capacity() * sizeof(Cell) + witnesses_.memory_usage();
+  // A pass for each voxel of the bitmap but the cells (remembered in scratch_.cells); clears the
+  // bitmap.
+  template <class Key>
+  void count_seen() {
+    detail::ScanBitmap& seen = scratch_.seen;
+    scratch_.cells.clear();
+    scratch_.masks.resize(static_cast<std::size_t>(seen.bricks(0)));
+    for (std::int64_t bz = 0; bz < seen.bricks(2); ++bz)
+      for (std::int64_t by = 0; by < seen.bricks(1); ++by) {
+        for (VoxelMask& m : scratch_.masks) m.clear();
+        seen.take_brick_row(by, bz, scratch_.masks.data());
+        for (std::int64_t bx = 0; bx < seen.bricks(0); ++bx) {
+          const VoxelMask& m = scratch_.masks[static_cast<std::size_t>(bx)];
+          if (!m.any()) continue;
+          const std::int64_t b[3] = {bx, by, bz};
+          typename Key::index_type corner[3];
+          for (int a = 0; a < 3; ++a)
+            corner[a] = static_cast<typename Key::index_type>(seen.lo()[a] + b[a] * kBrickEdge);
+          const Key first(corner[0], corner[1], corner[2]);
+          const std::uint32_t base = brick(brick_key(first)) * kBrickVoxels;
+          m.for_each([&](int i) {
+            Pass& q = passes_[base + static_cast<std::uint32_t>(i)];
+            if (q.cell != kNone) {
+              const Key k(static_cast<typename Key::index_type>(corner[0] + (i & 7)),
+                          static_cast<typename Key::index_type>(corner[1] + (i >> 3 & 7)),
+                          static_cast<typename Key::index_type>(corner[2] + (i >> 6)));
+              scratch_.cells.push_back(SeenCell{q.cell, 0, k.pack(), {}});
+              return;
+            }
+            ++q.passes;  // once: the bitmap holds each voxel once (no stamp needed)
+          });
+        }
+      }
+    seen.mark_clean();
   }
 
- private:
+  // The crossings of the cells seen, in the order of a ray-by-ray walk; then cross_cell() for
+  // each. A walk steps one voxel along one axis at a time and never back, so it can stand on a
+  // voxel only at the step equal to the voxel's L1 key distance from the origin's voxel, and only
+  // if the voxel lies within a voxel of its segment (every voxel it visits lies within half a
+  // diagonal) and in the key box of its two end voxels grown by one (it may pass the end voxel's
+  // border by rounding, never a second one: insertion/detail/dense_box.hpp). Each ray with such
+  // cells is walked once, up to the step of the farthest.
+  template <class Key, class Witness, class OnPass, class OnCross>
+  void cross_cells(const Grid<Key>& grid, const Point3f& o, const Key& ko, std::uint32_t stamp,
+                   Witness& witness, OnPass& on_pass, OnCross& on_cross) {
+    if (scratch_.cells.empty()) return;
+    for (SeenCell& c : scratch_.cells) {
+      const Key k = Key::unpack(c.packed);
+      c.step = 0;
+      for (int a = 0; a < 3; ++a)
+        c.step += static_cast<std::uint32_t>(std::abs(std::int64_t{k[a]} - std::int64_t{ko[a]}));
+      c.centre = Point3d{grid.index_to_coord(k[0]), grid.index_to_coord(k[1]),
+                         grid.index_to_coord(k[2])};
+    }
+    std::vector<Crossing>& crossings = scratch_.crossings;
+    std::vector<const SeenCell*>& near = scratch_.near;
+    crossings.clear();
+    const double r2 = grid.resolution() * grid.resolution();
+    for (std::size_t r = 0; r < scratch_.ends.size(); ++r) {
+      const detail::RayEnd& e = scratch_.ends[r];
+      const Stop& s = stops_[scratch_.stop_of[r]];
+      near.clear();
+      for (const SeenCell& c : scratch_.cells) {
+        const Key k = Key::unpack(c.packed);
+        bool in_box = true;
+        for (int a = 0; a < 3; ++a)
+          in_box = in_box && std::int64_t{k[a]} >= std::min<std::int64_t>(ko[a], e.key[a]) - 1 &&
+                   std::int64_t{k[a]} <= std::max<std::int64_t>(ko[a], e.key[a]) + 1;
+        if (in_box && segment_distance2(o, s.end, c.centre) <= r2) near.push_back(&c);
+      }
+      if (near.empty()) continue;
+      std::sort(near.begin(), near.end(),
+                [](const SeenCell* x, const SeenCell* y) { return x->step < y->step; });
+      walk_to_cells(grid, o, s, near, crossings);
+    }
+    for (const Crossing& x : crossings) cross_cell(x.j, x.cell, stamp, witness, on_pass, on_cross);
+  }
+
+  // Walks ray s (OctoMap's DDA, as for_each_ray_key) up to the step of the last of `near` (sorted
+  // by step) and adds its crossings of them.
+  template <class Key>
+  static void walk_to_cells(const Grid<Key>& grid, const Point3f& o, const Stop& s,
+                            const std::vector<const SeenCell*>& near,
+                            std::vector<Crossing>& crossings) {
+    RayWalk<Key> w;
+    if (start_ray(grid, o, s.end, w) != RayStart::walk) return;
+    std::size_t next = 0;
+    auto visit = [&](const Key& k, std::uint32_t step) {
+      while (next < near.size() && near[next]->step < step) ++next;
+      for (std::size_t i = next; i < near.size() && near[i]->step == step; ++i)
+        if (near[i]->packed == k.pack()) crossings.push_back(Crossing{s.j, step, near[i]->cell});
+    };
+    visit(w.origin, 0);
+    const std::uint32_t last = near.back()->step;
+    if (last == 0) return;
+    KeyPosition at{{w.origin[0], w.origin[1], w.origin[2]},
+                   {w.step[0], w.step[1], w.step[2]},
+                   {w.end[0], w.end[1], w.end[2]}};
+    std::uint32_t step = 0;
+    walk_ray(w.state, at, [&](const KeyPosition& p) {
+      if (!p.in_range(Key::extent)) return false;
+      using I = typename Key::index_type;
+      visit(Key(static_cast<I>(p.k[0]), static_cast<I>(p.k[1]), static_cast<I>(p.k[2])), ++step);
+      return step < last;
+    });
+  }
+
+  // Squared distance from c to the segment a -> b.
+  static double segment_distance2(const Point3f& a, const Point3f& b, const Point3d& c) {
+    const double ux = double{b.x} - a.x, uy = double{b.y} - a.y, uz = double{b.z} - a.z;
+    const double wx = c.x - a.x, wy = c.y - a.y, wz = c.z - a.z;
+    const double uu = ux * ux + uy * uy + uz * uz;
+    const double t = uu > 0 ? std::clamp((wx * ux + wy * uy + wz * uz) / uu, 0.0, 1.0) : 0.0;
+    const double dx = wx - t * ux, dy = wy - t * uy, dz = wz - t * uz;
+    return dx * dx + dy * dy + dz * dz;
+  }
+
   static constexpr std::uint32_t kBrickVoxels = 512;
   struct Pass {
     std::uint32_t passes = 0;  // keyframes that saw through the voxel
@@ -164,6 +427,9 @@ class VoxelTally {
   std::vector<Pass> passes_;
   std::vector<Cell> cells_;
   detail::FlatIndex witnesses_;  // (cell << 32 | witness) pairs seen (add_keyframe)
+  std::vector<Stop> stops_;      // the keyframe's rays (kept for the memory)
+  Scratch scratch_;
+  bool dense_walk_ = true;
 };
 
 }  // namespace knnocc

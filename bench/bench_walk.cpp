@@ -24,8 +24,8 @@
 
 #include "bench_common.hpp"
 
-#include <knnocc/insertion/detail/scan_bitmap.hpp>
 #include <knnocc/raycast/detail/fan_walk.hpp>
+#include <knnocc/raycast/detail/scan_bitmap.hpp>
 
 namespace {
 

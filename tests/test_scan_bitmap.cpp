@@ -1,4 +1,4 @@
-// ScanBitmap (insertion/detail/scan_bitmap.hpp): the dense per-scan scratch.
+// ScanBitmap (raycast/detail/scan_bitmap.hpp): the dense per-scan scratch.
 #include <doctest/doctest.h>
 
 #include <algorithm>

@@ -33,8 +33,9 @@ const std::map<std::string, std::set<std::string>> kAllowed = {
     {"raycast", {"core", "map"}},
     {"knn", {"core", "stats"}},
     // A contextual model (sensor/contextual_model.hpp) keeps per-map-point state against the map:
-    // it reads and updates voxels and walks rays for free-space evidence.
-    {"sensor", {"core", "stats", "knn", "map", "raycast"}},
+    // it reads and updates voxels and walks rays for free-space evidence (the robust model's
+    // see-through counts on the dense walks of raycast/detail).
+    {"sensor", {"core", "stats", "knn", "map", "raycast", "raycast/detail"}},
     // map/detail/brick_access.hpp: whole-brick writers and readers (apply, tree files, replay).
     {"insertion", {"core", "map", "map/detail", "raycast", "raycast/detail", "sensor"}},
     {"top", {"core", "stats", "map", "raycast", "knn", "sensor", "insertion"}},

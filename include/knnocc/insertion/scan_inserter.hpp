@@ -22,8 +22,8 @@
 //      key; the key box of the scan. Threads take equal shares of the points (when the point
 //      container has random access).
 //   2. walk: every ray marks its voxels in a per-scan scratch: a dense bit (or byte) per voxel of
-//      the box when it is small enough (detail/dense_box.hpp, detail/scan_bitmap.hpp), walked many
-//      rays at once (raycast/detail/fan_walk.hpp), else hashed masks per touched brick
+//      the box when it is small enough (detail/dense_box.hpp, raycast/detail/scan_bitmap.hpp),
+//      walked many rays at once (raycast/detail/fan_walk.hpp), else hashed masks per touched brick
 //      (detail/hashed_marks.hpp). Threads take chunks of rays into their own scratch; free and
 //      occupied are unions, so the result does not depend on which thread walked which ray.
 //      Large scans whose dense box is known in advance run 1 and 2 a chunk of points at a time

@@ -41,11 +41,10 @@
 #include "../core/detail/flat_index.hpp"
 #include "../core/grid.hpp"
 #include "../core/point3.hpp"
-#include "../insertion/detail/dense_box.hpp"
-#include "../insertion/detail/scan_bitmap.hpp"
 #include "../map/brick.hpp"
 #include "../raycast/dda.hpp"
 #include "../raycast/detail/fan_walk.hpp"
+#include "../raycast/detail/scan_bitmap.hpp"
 
 namespace knnocc {
 
@@ -114,8 +113,8 @@ class VoxelTally {
       const double len = std::sqrt(ux * ux + uy * uy + uz * uz);
       if (!(len > margin)) continue;
       const double f = (len - margin) / len;
-      stops_.push_back(Stop{j, detail::to_point3f(Point3d{origin.x + ux * f, origin.y + uy * f,
-                                                          origin.z + uz * f})});
+      stops_.push_back(Stop{
+          j, detail::to_point3f(Point3d{origin.x + ux * f, origin.y + uy * f, origin.z + uz * f})});
     }
     const std::uint32_t stamp = keyframe + 1;
     if (dense_walk_ && walk_dense(grid, o, stamp, witness, on_pass, on_cross)) return;
@@ -171,15 +170,22 @@ class VoxelTally {
     ~Scratch() = default;
     std::size_t memory_usage() const {
       return seen.capacity_bytes() + (block ? sizeof(detail::RayBlock) : 0) +
-             ends.capacity() * sizeof(detail::RayEnd) +
-             stop_of.capacity() * sizeof(std::uint32_t) + masks.capacity() * sizeof(VoxelMask) +
-             cells.capacity() * sizeof(SeenCell) + near.capacity() * sizeof(SeenCell*) +
-             crossings.capacity() * sizeof(Crossing);
+             ends.capacity() * sizeof(detail::RayEnd) + stop_of.capacity() * sizeof(std::uint32_t) +
+             masks.capacity() * sizeof(VoxelMask) + cells.capacity() * sizeof(SeenCell) +
+             near.capacity() * sizeof(SeenCell*) + crossings.capacity() * sizeof(Crossing);
     }
   };
-  // Bytes of dense scratch a keyframe may take (detail::plan_dense_box: its bitmap up to half);
-  // larger boxes take the hashed walk.
-  static constexpr std::size_t kScratchLimit = std::size_t{8} << 20;
+  // The dense walk's box of keys [lo, lo + size).
+  struct Box {
+    std::int64_t lo[3], size[3];
+  };
+  // Voxels of a box at most (a 4 MB bitmap), and per ray step at most beyond the first 2^20 (a
+  // sparser box costs more to clear and scan than its rays cost to walk one at a time; as the scan
+  // inserter's, insertion/detail/dense_box.hpp); a box edge at most 2^16 voxels (the lane walks'
+  // bound, raycast/detail/linear_ray.hpp).
+  static constexpr std::int64_t kMaxBoxVoxels = std::int64_t{32} << 20;
+  static constexpr std::int64_t kVoxelsPerStep = 64;
+  static constexpr std::int64_t kMaxBoxEdge = std::int64_t{1} << 16;
 
   // Ray j crosses cell `cell`: on_cross, then a pass unless the ray's witness has seen through
   // the voxel before or the keyframe has passed it already.
@@ -202,8 +208,8 @@ class VoxelTally {
 
   // Every ray, one at a time, on hashed bricks.
   template <class Key, class Witness, class OnPass, class OnCross>
-  void walk_hashed(const Grid<Key>& grid, const Point3f& o, std::uint32_t stamp,
-                   Witness& witness, OnPass& on_pass, OnCross& on_cross) {
+  void walk_hashed(const Grid<Key>& grid, const Point3f& o, std::uint32_t stamp, Witness& witness,
+                   OnPass& on_pass, OnCross& on_cross) {
     std::uint64_t last_brick = ~std::uint64_t{0};
     std::uint32_t base = 0;
     for (const Stop& s : stops_)
@@ -231,7 +237,7 @@ class VoxelTally {
                   OnPass& on_pass, OnCross& on_cross) {
     Key ko;
     if (!grid.point_to_key(o, ko)) return false;
-    const std::optional<detail::DenseBox> box = plan_box(grid, ko);
+    const std::optional<Box> box = plan_box(grid, ko);
     if (!box) return false;
     if (scratch_.ends.empty()) return true;
     detail::ScanBitmap& seen = scratch_.seen;
@@ -255,12 +261,14 @@ class VoxelTally {
     return true;
   }
 
-  // The dense box of the rays that leave the origin's voxel `ko` (into scratch_.ends), or nullopt
-  // when a ray ends outside the key range or the box does not suit a bitmap.
+  // The dense box of the rays that leave the origin's voxel `ko` (into scratch_.ends): their key
+  // box grown by one voxel (a walk may pass its end voxel's border by rounding), brick aligned,
+  // rows along x whole 64-bit words (as ScanBitmap takes them); nullopt when a ray ends outside
+  // the key range or the box leaves it or breaks the limits above.
   template <class Key>
-  std::optional<detail::DenseBox> plan_box(const Grid<Key>& grid, const Key& ko) {
-    detail::KeyBox keys;
-    for (int a = 0; a < 3; ++a) keys.lo[a] = keys.hi[a] = ko[a];
+  std::optional<Box> plan_box(const Grid<Key>& grid, const Key& ko) {
+    std::int64_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) lo[a] = hi[a] = ko[a];
     scratch_.ends.clear();
     scratch_.stop_of.clear();
     std::size_t steps = 0;
@@ -268,13 +276,29 @@ class VoxelTally {
       Key ke;
       if (!grid.point_to_key(stops_[i].end, ke)) return std::nullopt;
       if (ke == ko) continue;  // a ray within one voxel visits none
-      const std::int64_t k[3] = {ke[0], ke[1], ke[2]};
-      keys.extend(k);
-      for (int a = 0; a < 3; ++a) steps += static_cast<std::size_t>(std::llabs(k[a] - ko[a]));
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min<std::int64_t>(lo[a], ke[a]);
+        hi[a] = std::max<std::int64_t>(hi[a], ke[a]);
+        steps += static_cast<std::size_t>(std::llabs(std::int64_t{ke[a]} - ko[a]));
+      }
       scratch_.ends.push_back(detail::RayEnd{stops_[i].end, {ke[0], ke[1], ke[2]}});
       scratch_.stop_of.push_back(static_cast<std::uint32_t>(i));
     }
-    return detail::plan_dense_box<Key>(keys, steps, kScratchLimit, 1);
+    Box box;
+    std::int64_t voxels = 1;
+    for (int a = 0; a < 3; ++a) {
+      if (lo[a] < 1 || hi[a] > Key::extent - 2) return std::nullopt;
+      box.lo[a] = (lo[a] - 1) / kBrickEdge * kBrickEdge;
+      const std::int64_t end = ((hi[a] + 1) / kBrickEdge + 1) * kBrickEdge;
+      const std::int64_t align = a == 0 ? 64 : kBrickEdge;
+      box.size[a] = (end - box.lo[a] + align - 1) / align * align;
+      if (box.size[a] > kMaxBoxEdge) return std::nullopt;
+      voxels *= box.size[a];
+    }
+    if (voxels > kMaxBoxVoxels ||
+        voxels > kVoxelsPerStep * static_cast<std::int64_t>(steps) + (std::int64_t{1} << 20))
+      return std::nullopt;
+    return box;
   }
 
   // A pass for each voxel of the bitmap but the cells (remembered in scratch_.cells); clears the
@@ -329,8 +353,8 @@ class VoxelTally {
       c.step = 0;
       for (int a = 0; a < 3; ++a)
         c.step += static_cast<std::uint32_t>(std::abs(std::int64_t{k[a]} - std::int64_t{ko[a]}));
-      c.centre = Point3d{grid.index_to_coord(k[0]), grid.index_to_coord(k[1]),
-                         grid.index_to_coord(k[2])};
+      c.centre =
+          Point3d{grid.index_to_coord(k[0]), grid.index_to_coord(k[1]), grid.index_to_coord(k[2])};
     }
     std::vector<Crossing>& crossings = scratch_.crossings;
     std::vector<const SeenCell*>& near = scratch_.near;

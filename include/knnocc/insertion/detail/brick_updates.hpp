@@ -19,9 +19,9 @@
 #include "../../map/brick.hpp"
 #include "../../map/detail/brick_access.hpp"
 #include "../../map/occupancy_map.hpp"
+#include "../../raycast/detail/scan_bitmap.hpp"
 #include "hashed_marks.hpp"
 #include "hit_codes.hpp"
-#include "scan_bitmap.hpp"
 #include "thread_scratch.hpp"
 #include "work_queue.hpp"
 

@@ -27,12 +27,12 @@
 #include "../../core/point_traits.hpp"
 #include "../../raycast/dda.hpp"
 #include "../../raycast/detail/linear_ray.hpp"
+#include "../../raycast/detail/scan_bitmap.hpp"
 #include "../../sensor/endpoint_rating.hpp"
 #include "append_buffer.hpp"
 #include "hit_codes.hpp"
 #include "point_bounds.hpp"
 #include "point_keys.hpp"
-#include "scan_bitmap.hpp"
 
 namespace knnocc::detail {
 

@@ -12,11 +12,11 @@
 
 #include "../../map/brick.hpp"
 #include "../../raycast/detail/ray_block.hpp"
+#include "../../raycast/detail/scan_bitmap.hpp"
 #include "append_buffer.hpp"
 #include "collect.hpp"
 #include "hashed_marks.hpp"
 #include "hit_codes.hpp"
-#include "scan_bitmap.hpp"
 
 namespace knnocc::detail {
 

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ScanBitmap: one bit (or one byte) per voxel of a brick-aligned box of keys, the per-scan
-// scratch of ScanInserter when a scan's box is small enough (see plan_dense_box, dense_box.hpp).
+// scratch of ScanInserter when a scan's box is small enough (see plan_dense_box,
+// insertion/detail/dense_box.hpp) and of VoxelTally's see-through walk (sensor/voxel_tally.hpp).
 //
 // Voxel ((z - lo_z) * ny + (y - lo_y)) * nx + (x - lo_x), x fastest, so a step along an axis is a
 // constant offset (what the ray walk needs). With bits, the 8 bits of a brick row (fixed y and z)

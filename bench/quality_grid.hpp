@@ -17,7 +17,7 @@
 //                beyond its inner range, so its weak outer rays are gone
 //   robust       RobustModel with its defaults, whatever they are at the time, or with --variant
 //                NAME one of its rule variants (bench/robust_variants.hpp: -witness, +through,
-//                -both), to measure a rule against the defaults on the same cells
+//                -both, nbsupport), to measure a rule against the defaults on the same cells
 // Then the goals, the "no cliff" figure (the largest change of a model's irrelevant share between
 // neighbouring cells) and one heat-map PNG per model (bench/heat_map.hpp).
 
@@ -122,8 +122,10 @@ inline bool wanted(const std::vector<std::size_t>& subset, std::size_t v) {
 
 inline int run_grid(const GridOptions& opt) {
   if (!opt.variant.empty() && opt.variant != "-witness" && opt.variant != "+through" &&
-      opt.variant != "-both") {
-    std::fprintf(stderr, "bench_robust_model: unknown --variant %s (-witness, +through, -both)\n",
+      opt.variant != "-both" && opt.variant != "nbsupport") {
+    std::fprintf(stderr,
+                 "bench_robust_model: unknown --variant %s (-witness, +through, -both, "
+                 "nbsupport)\n",
                  opt.variant.c_str());
     return 2;
   }
@@ -177,6 +179,8 @@ inline int run_grid(const GridOptions& opt) {
         score_model(kfs, ref, BasicRobustModel<RaysThroughBelieved>{}, 0.5, score[c][6]);
       else if (opt.variant == "-both")
         score_model(kfs, ref, BasicRobustModel<PerKeyframeAndThrough>{}, 0.5, score[c][6]);
+      else if (opt.variant == "nbsupport")
+        score_model(kfs, ref, BasicRobustModel<NbSupport>{}, 0.5, score[c][6]);
       else
         score_model(kfs, ref, RobustModel{}, 0.5, score[c][6]);
     }

@@ -48,6 +48,10 @@ struct PerKeyframeAndThrough : RobustRules {
   static constexpr bool witness_once = false;
   static constexpr bool rays_through_believed = true;
 };
+// Support negative binomial in the mixture (the model: geometric).
+struct NbSupport : RobustRules {
+  static constexpr MixtureTerms terms{false, true};
+};
 // Without independent support (the mixture sees every point with none).
 struct WithoutSupport : RobustRules {
   static constexpr bool support_check = false;  // nothing to check
@@ -110,6 +114,7 @@ std::vector<RobustVariant> robust_variants(bool ablate, MapSim map_sim, MapReal 
   add("-witness", BasicRobustModel<SeeThroughPerKeyframe>{});
   add("+through", BasicRobustModel<RaysThroughBelieved>{});
   add("-both", BasicRobustModel<PerKeyframeAndThrough>{});
+  add("nbsupport", BasicRobustModel<NbSupport>{});
   return v;
 }
 

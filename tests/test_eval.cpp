@@ -138,6 +138,8 @@ TEST_CASE("eval: Table 1 metrics equal a brute-force count on a hand-made map") 
     ++want.occupied;
     want.in_shell += shell_like;
     want.covered += shell_like || (in == total && c.z > 0);
+    // On the ground: the voxel just above z = 0 (a voxel border), away from the solids.
+    want.ground += std::fabs(c.z - r / 2) < 1e-9 && ref.distance(c) > 0.3;
     if (c.z < 0.3) return;
     ++want.evaluated;
     want.irrelevant += ref.distance(c) > 0.3;
@@ -148,6 +150,8 @@ TEST_CASE("eval: Table 1 metrics equal a brute-force count on a hand-made map") 
   CHECK(got.evaluated == want.evaluated);
   CHECK(got.irrelevant == want.irrelevant);
   CHECK(got.free_inside == want.free_inside);
+  CHECK(got.ground == want.ground);
+  CHECK(want.ground > 20);
   // Sampling misses boxes that only graze a surface: the exact counts may be a few higher.
   CHECK(got.in_shell >= want.in_shell);
   CHECK(got.in_shell <= want.in_shell + want.in_shell / 20 + 2);

@@ -1,10 +1,11 @@
 // sensor/robust_model.hpp and sensor/real_point_mixture.hpp: the mixture recovers the rates of a
-// synthetic two-class sample, and its EM step equals its formulas summed point by point; the model's ledger (views, creator, latest detection, independent
-// support) and see-through counts (each map point a ray ends at counting once per voxel) equal a
-// brute-force recomputation from the keyframes; every map point is believed exactly when its
-// posterior says so, and a voxel whose points are all disbelieved is not occupied; rays from a
-// point's third detection, none through a voxel holding another believed point; SLAM evidence
-// reaches the model; dense input without ids is mapped as the OctoMap model maps it.
+// synthetic two-class sample, and its EM step equals its formulas summed point by point; the
+// model's ledger (views, creator, latest detection, independent support) and see-through counts
+// (each map point a ray ends at counting once per voxel) equal a brute-force recomputation from the
+// keyframes; every map point is believed exactly when its posterior says so, and a voxel whose
+// points are all disbelieved is not occupied; rays from a point's third detection, none through a
+// voxel holding another believed point; SLAM evidence reaches the model; dense input without ids is
+// mapped as the OctoMap model maps it.
 
 #include <doctest/doctest.h>
 
@@ -89,8 +90,10 @@ TEST_CASE("robust mixture: recovers the rates of a two-class sample and classifi
   CHECK(r.u_wrong == doctest::Approx(1.5).epsilon(0.1));
   CHECK(accuracy(m, s) > 0.94);
   CHECK(m.bins() < s.counts.size());  // equal counts share a bin
-  // Every step from the starting rates raises the likelihood of this large sample (the
-  // pseudo-observations weigh nothing next to 20,000 points).
+  // With geometric support each step is an EM step: from the starting rates every step raises
+  // the likelihood of this large sample (the pseudo-observations weigh nothing next to 20,000
+  // points). The negative binomial variant's variance is a moment step, so its fit is only
+  // checked to end far above where it started.
   RealPointMixture step(MixtureTerms{});
   for (const PointCounts& k : s.counts) step.add(k);
   double before = step.log_likelihood();
@@ -100,6 +103,10 @@ TEST_CASE("robust mixture: recovers the rates of a two-class sample and classifi
     CHECK(now >= before - 1e-9 * std::fabs(before));
     before = now;
   }
+  RealPointMixture nb(MixtureTerms{false, true}), start(MixtureTerms{false, true});
+  for (const PointCounts& k : s.counts) nb.add(k), start.add(k);
+  nb.fit();
+  CHECK(nb.log_likelihood() > start.log_likelihood() + 1000.0);
 }
 
 TEST_CASE("robust mixture: each EM step is the update its formulas give, point by point") {
@@ -111,7 +118,7 @@ TEST_CASE("robust mixture: each EM step is the update its formulas give, point b
   for (int round = 0; round < 5; ++round) {
     const RealPointRates before = m.rates();
     double n = 0, w = 0, w_n = 0, w_c = 0, v_n = 0, v_c = 0, w_u = 0, v_u = 0, w_f = 0, w_v = 0,
-           v_f = 0, v_v = 0;
+           v_f = 0, v_v = 0, w_uu = 0, v_uu = 0;
     std::size_t certain = 0;
     for (const PointCounts& k : s.counts) {
       const double l = m.log_odds(k), p = 1.0 / (1.0 + std::exp(-l)), q = 1.0 - p;
@@ -119,7 +126,7 @@ TEST_CASE("robust mixture: each EM step is the update its formulas give, point b
       const double met = double(k.d) + k.c;
       n += 1, w += p, w_n += p * met, w_c += p * k.c, v_n += q * met, v_c += q * k.c;
       w_u += p * k.u, v_u += q * k.u, w_f += p * k.f, w_v += p * k.v, v_f += q * k.f,
-          v_v += q * k.v;
+          v_v += q * k.v, w_uu += p * k.u * k.u, v_uu += q * k.u * k.u;
     }
     CHECK(certain > 100);
     CHECK(certain < s.counts.size() - 100);
@@ -133,6 +140,9 @@ TEST_CASE("robust mixture: each EM step is the update its formulas give, point b
     CHECK(r.u_wrong == doctest::Approx((v_u + 1) / (n - w + 1)).epsilon(1e-12));
     CHECK(r.f_real == doctest::Approx((w_f + 1) / (w_v + 2)).epsilon(1e-12));
     CHECK(r.f_wrong == doctest::Approx((v_f + 1) / (v_v + 2)).epsilon(1e-12));
+    const double mr = (w_u + 1) / (w + 1), mw = (v_u + 1) / (n - w + 1);
+    CHECK(r.u_var_real == doctest::Approx((w_uu + 1) / (w + 1) - mr * mr).epsilon(1e-9));
+    CHECK(r.u_var_wrong == doctest::Approx((v_uu + 1) / (n - w + 1) - mw * mw).epsilon(1e-9));
   }
 }
 
@@ -148,6 +158,28 @@ TEST_CASE("robust mixture: the SLAM system's found/visible counts count when giv
   const RealPointMixture plain = fitted(without);
   CHECK(accuracy(with, s) > 0.93);
   CHECK(accuracy(with, s) > accuracy(plain, without) + 0.1);
+}
+
+TEST_CASE("robust mixture, negative binomial variant: little support is strong evidence") {
+  // Real points' support near 50 (as on the simulator's surfaces), wrong ones' near 3, and a
+  // wrong match re-detected often: detections say real, its support says wrong.
+  std::mt19937 rng(13);
+  std::poisson_distribution<std::uint32_t> real_u(50.0), wrong_u(3.0);
+  RealPointMixture nb(MixtureTerms{false, true}), geometric;
+  for (int i = 0; i < 20000; ++i) {
+    const bool real = i % 5 != 0;
+    PointCounts k{real ? 5u : 3u, real ? 0u : 2u, real ? real_u(rng) : wrong_u(rng), 0, 0, 0};
+    nb.add(k);
+    geometric.add(k);
+  }
+  nb.fit();
+  geometric.fit();
+  CHECK(nb.rates().u_var_real == doctest::Approx(50.0).epsilon(0.1));  // Poisson: variance = mean
+  const PointCounts redetected{13, 1, 4, 0, 0, 0}, real_point{5, 0, 48, 0, 0, 0};
+  CHECK(nb.log_odds(redetected) < geometric.log_odds(redetected) - 10);
+  CHECK(nb.log_odds(redetected) < -10);
+  CHECK(nb.log_odds(real_point) > 10);
+  CHECK(std::isfinite(nb.log_odds(PointCounts{5, 0, 5000, 0, 0, 0})));  // past the cache
 }
 
 TEST_CASE("robust mixture: the gap term only when turned on") {

@@ -15,6 +15,9 @@
 //   precision          1 - irrelevant / evaluated
 //   shell_recall       in_shell / shell
 //   free_inside        free voxels lying entirely inside a solid (space wrongly carved)
+//   ground             occupied voxels that meet the ground plane farther than `inflate` from
+//                      every solid: the ground the band hides from irrelevant (a sparse textured
+//                      ground is real structure a model may lose; Table 1 does not see it)
 
 #include <algorithm>
 #include <cmath>
@@ -44,6 +47,7 @@ struct Metrics {
   std::size_t occupied = 0, free = 0;  ///< finest-level voxels of the map
   std::size_t shell = 0;               ///< voxels of the reference shell at the map's resolution
   std::size_t in_shell = 0, covered = 0, irrelevant = 0, evaluated = 0, free_inside = 0;
+  std::size_t ground = 0;  ///< occupied voxels on the ground, away from the solids
 
   double precision() const {
     return evaluated ? 1.0 - static_cast<double>(irrelevant) / static_cast<double>(evaluated) : 1.0;
@@ -118,6 +122,9 @@ Metrics evaluate(const OccupancyMap<Key>& map, const Reference& ref, MetricOptio
     const bool shell = on_shell(ref, rel, c);
     m.in_shell += shell;
     m.covered += shell || rel == BoxRelation::inside;
+    if (ref.has_ground && c.z - r / 2 <= ref.ground_z && ref.ground_z < c.z + r / 2 &&
+        ref.distance(c) > opt.inflate)
+      ++m.ground;
     if (ref.has_ground && c.z - ref.ground_z < opt.ground_band) return;  // the ground band
     ++m.evaluated;
     m.irrelevant += ref.distance(c) > opt.inflate;

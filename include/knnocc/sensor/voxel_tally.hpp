@@ -179,13 +179,8 @@ class VoxelTally {
   struct Box {
     std::int64_t lo[3], size[3];
   };
-  // Voxels of a box at most (a 4 MB bitmap), and per ray step at most beyond the first 2^20 (a
-  // sparser box costs more to clear and scan than its rays cost to walk one at a time; as the scan
-  // inserter's, insertion/detail/dense_box.hpp); a box edge at most 2^16 voxels (the lane walks'
-  // bound, raycast/detail/linear_ray.hpp).
+  // Voxels of a box at most: a 4 MB bitmap.
   static constexpr std::int64_t kMaxBoxVoxels = std::int64_t{32} << 20;
-  static constexpr std::int64_t kVoxelsPerStep = 64;
-  static constexpr std::int64_t kMaxBoxEdge = std::int64_t{1} << 16;
 
   // Ray j crosses cell `cell`: on_cross, then a pass unless the ray's witness has seen through
   // the voxel before or the keyframe has passed it already.
@@ -261,10 +256,9 @@ class VoxelTally {
     return true;
   }
 
-  // The dense box of the rays that leave the origin's voxel `ko` (into scratch_.ends): their key
-  // box grown by one voxel (a walk may pass its end voxel's border by rounding), brick aligned,
-  // rows along x whole 64-bit words (as ScanBitmap takes them); nullopt when a ray ends outside
-  // the key range or the box leaves it or breaks the limits above.
+  // The dense box of the rays that leave the origin's voxel `ko` (into scratch_.ends), shaped as
+  // the scan inserter's (detail::dense_box_shape) and as sparse at most (kDenseBitsPerStep);
+  // nullopt when a ray ends outside the key range or the box does not suit a bitmap.
   template <class Key>
   std::optional<Box> plan_box(const Grid<Key>& grid, const Key& ko) {
     std::int64_t lo[3], hi[3];
@@ -285,18 +279,10 @@ class VoxelTally {
       scratch_.stop_of.push_back(static_cast<std::uint32_t>(i));
     }
     Box box;
-    std::int64_t voxels = 1;
-    for (int a = 0; a < 3; ++a) {
-      if (lo[a] < 1 || hi[a] > Key::extent - 2) return std::nullopt;
-      box.lo[a] = (lo[a] - 1) / kBrickEdge * kBrickEdge;
-      const std::int64_t end = ((hi[a] + 1) / kBrickEdge + 1) * kBrickEdge;
-      const std::int64_t align = a == 0 ? 64 : kBrickEdge;
-      box.size[a] = (end - box.lo[a] + align - 1) / align * align;
-      if (box.size[a] > kMaxBoxEdge) return std::nullopt;
-      voxels *= box.size[a];
-    }
-    if (voxels > kMaxBoxVoxels ||
-        voxels > kVoxelsPerStep * static_cast<std::int64_t>(steps) + (std::int64_t{1} << 20))
+    std::int64_t voxels = 0;
+    if (!detail::dense_box_shape<Key>(lo, hi, box.lo, box.size, voxels) || voxels > kMaxBoxVoxels ||
+        voxels >
+            detail::kDenseBitsPerStep * static_cast<std::int64_t>(steps) + (std::int64_t{1} << 20))
       return std::nullopt;
     return box;
   }

@@ -11,6 +11,7 @@
 
 #include "../../map/brick.hpp"
 #include "../../raycast/detail/fan_walk.hpp"
+#include "../../raycast/detail/scan_bitmap.hpp"
 #include "collect.hpp"
 
 namespace knnocc::detail {
@@ -22,15 +23,6 @@ struct DenseBox {
   bool byte_marks = false;
 };
 
-/// Bits of dense scratch per ray step at most: beyond that, clearing and scanning the bitmap would
-/// cost more than walking the rays.
-inline constexpr std::int64_t kDenseBitsPerStep = 64;
-/// The dense box is the key box of origin and end points grown by one voxel: per axis a walk moves
-/// monotonically from the origin voxel and may pass the end voxel's border by rounding (a crossing
-/// computed within the length), but never a second border: that would take an error of a whole
-/// voxel in t, while the float direction and length err by about 1e-6 of the ray length, under 0.2
-/// voxel for the rays of a box edge below 2^16 voxels + 64 (the lane walks' precondition too).
-inline constexpr std::int64_t kDenseMaxEdge = (std::int64_t{1} << 16) + 64;
 /// Free voxels are marked in bytes, not bits, when the walk takes bundles (best_walk_path), the box
 /// has at most kByteMarkVoxels voxels (a byte map of up to 4 MB per thread, taken 2 MB at a time)
 /// and the scan walks at least kByteMarkSteps steps: a byte is marked by a plain store, where bits
@@ -51,15 +43,7 @@ std::optional<DenseBox> plan_dense_box(const KeyBox& keys, std::size_t steps,
                                        std::size_t scratch_limit, unsigned threads) {
   DenseBox box;
   std::int64_t bits = 1;
-  for (int a = 0; a < 3; ++a) {
-    if (keys.lo[a] < 1 || keys.hi[a] > Key::extent - 2) return std::nullopt;  // in key range
-    box.lo[a] = (keys.lo[a] - 1) / kBrickEdge * kBrickEdge;
-    const std::int64_t end = ((keys.hi[a] + 1) / kBrickEdge + 1) * kBrickEdge;
-    const std::int64_t align = a == 0 ? 64 : kBrickEdge;
-    box.size[a] = (end - box.lo[a] + align - 1) / align * align;
-    if (box.size[a] > kDenseMaxEdge) return std::nullopt;
-    bits *= box.size[a];
-  }
+  if (!dense_box_shape<Key>(keys.lo, keys.hi, box.lo, box.size, bits)) return std::nullopt;
   // Two bitmaps per thread: occupied voxels in bits, free voxels in bytes when the box is small.
   const double limit = static_cast<double>(scratch_limit) / threads;
   box.byte_marks = best_walk_path<ByteMarks>() == WalkPath::avx512_bundles &&

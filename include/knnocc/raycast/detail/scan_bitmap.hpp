@@ -23,6 +23,36 @@
 
 namespace knnocc::detail {
 
+/// Bits of dense scratch per ray step at most: beyond that, clearing and scanning the bitmap would
+/// cost more than walking the rays.
+inline constexpr std::int64_t kDenseBitsPerStep = 64;
+/// The dense box is the key box of origin and end points grown by one voxel: per axis a walk moves
+/// monotonically from the origin voxel and may pass the end voxel's border by rounding (a crossing
+/// computed within the length), but never a second border: that would take an error of a whole
+/// voxel in t, while the float direction and length err by about 1e-6 of the ray length, under 0.2
+/// voxel for the rays of a box edge below 2^16 voxels + 64 (the lane walks' precondition too).
+inline constexpr std::int64_t kDenseMaxEdge = (std::int64_t{1} << 16) + 64;
+
+/// The box [box_lo, box_lo + box_size) of a ScanBitmap for the keys lo..hi (inclusive, per axis)
+/// grown by one voxel: brick aligned, rows along x whole 64-bit words (take_brick_row reads them
+/// so); `voxels` its number of voxels. False when it leaves the key range or an edge exceeds
+/// kDenseMaxEdge.
+template <class Key>
+bool dense_box_shape(const std::int64_t (&lo)[3], const std::int64_t (&hi)[3],
+                     std::int64_t (&box_lo)[3], std::int64_t (&box_size)[3], std::int64_t& voxels) {
+  voxels = 1;
+  for (int a = 0; a < 3; ++a) {
+    if (lo[a] < 1 || hi[a] > Key::extent - 2) return false;  // in key range
+    box_lo[a] = (lo[a] - 1) / kBrickEdge * kBrickEdge;
+    const std::int64_t end = ((hi[a] + 1) / kBrickEdge + 1) * kBrickEdge;
+    const std::int64_t align = a == 0 ? 64 : kBrickEdge;
+    box_size[a] = (end - box_lo[a] + align - 1) / align * align;
+    if (box_size[a] > kDenseMaxEdge) return false;
+    voxels *= box_size[a];
+  }
+  return true;
+}
+
 class ScanBitmap {
  public:
   /// From this size on a bitmap takes whole 2 MB huge pages (huge_pages.hpp), with the rest of

@@ -169,3 +169,20 @@ TEST_CASE("dda.dense_sampling_oracle") {
   }
   MESSAGE(rays << " random rays checked against dense sampling");
 }
+
+TEST_CASE("dda.for_each_ray_key stops where a bool visit says so") {
+  const Grid<OcKey> grid(0.1);
+  const Point3f o{0.05f, 0.05f, 0.05f}, e{2.37f, 1.11f, -0.83f};
+  std::vector<OcKey> all;
+  REQUIRE(compute_ray_keys(grid, o, e, all));
+  REQUIRE(all.size() > 10);
+  for (const std::size_t stop : {std::size_t{0}, std::size_t{4}, all.size() - 1}) {
+    std::vector<OcKey> seen;
+    CHECK(for_each_ray_key(grid, o, e, [&](const OcKey& k) {
+      seen.push_back(k);
+      return seen.size() <= stop;  // false once stop + 1 keys are seen
+    }));
+    REQUIRE(seen.size() == stop + 1);
+    CHECK(std::equal(seen.begin(), seen.end(), all.begin()));
+  }
+}

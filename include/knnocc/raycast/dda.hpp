@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 #include "../core/config.hpp"
@@ -201,23 +202,31 @@ void walk_ray(const WalkState& s, Position& at, Visit&& visit) {
 }
 
 /// Calls visit(key) for every voxel the segment origin -> end crosses, origin voxel included,
-/// end voxel excluded. Returns false, visiting nothing, when origin or end is not finite or out
-/// of the key range (OctoMap's computeRayKeys returns false there too).
+/// end voxel excluded; a visit that returns bool stops the walk by returning false. Returns false,
+/// visiting nothing, when origin or end is not finite or out of the key range (OctoMap's
+/// computeRayKeys returns false there too).
 template <class Key, class Visit>
 bool for_each_ray_key(const Grid<Key>& grid, const Point3f& origin, const Point3f& end,
                       Visit&& visit) {
+  auto go_on = [&](const Key& k) {
+    if constexpr (std::is_same_v<decltype(visit(k)), bool>) {
+      return visit(k);
+    } else {
+      visit(k);
+      return true;
+    }
+  };
   RayWalk<Key> w;
   const RayStart start = start_ray(grid, origin, end, w);
   if (start != RayStart::walk) return start == RayStart::same_voxel;
-  visit(static_cast<const Key&>(w.origin));
+  if (!go_on(static_cast<const Key&>(w.origin))) return true;
   KeyPosition at{{w.origin[0], w.origin[1], w.origin[2]},
                  {w.step[0], w.step[1], w.step[2]},
                  {w.end[0], w.end[1], w.end[2]}};
   walk_ray(w.state, at, [&](const KeyPosition& p) {
     if (!p.in_range(Key::extent)) return false;
     using I = typename Key::index_type;
-    visit(Key(static_cast<I>(p.k[0]), static_cast<I>(p.k[1]), static_cast<I>(p.k[2])));
-    return true;
+    return go_on(Key(static_cast<I>(p.k[0]), static_cast<I>(p.k[1]), static_cast<I>(p.k[2])));
   });
   return true;
 }

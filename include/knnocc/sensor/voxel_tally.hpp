@@ -149,6 +149,7 @@ class VoxelTally {
   struct SeenCell {
     std::uint32_t cell, step;
     std::uint64_t packed;
+    std::int64_t key[3];
     Point3d centre;
   };
   // The dense walk's scratch, kept between keyframes for its memory; a copy starts empty.
@@ -313,7 +314,7 @@ class VoxelTally {
               const Key k(static_cast<typename Key::index_type>(corner[0] + (i & 7)),
                           static_cast<typename Key::index_type>(corner[1] + (i >> 3 & 7)),
                           static_cast<typename Key::index_type>(corner[2] + (i >> 6)));
-              scratch_.cells.push_back(SeenCell{q.cell, 0, k.pack(), {}});
+              scratch_.cells.push_back(SeenCell{q.cell, 0, k.pack(), {k[0], k[1], k[2]}, {}});
               return;
             }
             ++q.passes;  // once: the bitmap holds each voxel once (no stamp needed)
@@ -337,8 +338,7 @@ class VoxelTally {
     for (SeenCell& c : scratch_.cells) {
       const Key k = Key::unpack(c.packed);
       c.step = 0;
-      for (int a = 0; a < 3; ++a)
-        c.step += static_cast<std::uint32_t>(std::abs(std::int64_t{k[a]} - std::int64_t{ko[a]}));
+      for (int a = 0; a < 3; ++a) c.step += static_cast<std::uint32_t>(std::abs(c.key[a] - ko[a]));
       c.centre =
           Point3d{grid.index_to_coord(k[0]), grid.index_to_coord(k[1]), grid.index_to_coord(k[2])};
     }
@@ -351,11 +351,10 @@ class VoxelTally {
       const Stop& s = stops_[scratch_.stop_of[r]];
       near.clear();
       for (const SeenCell& c : scratch_.cells) {
-        const Key k = Key::unpack(c.packed);
         bool in_box = true;
         for (int a = 0; a < 3; ++a)
-          in_box = in_box && std::int64_t{k[a]} >= std::min<std::int64_t>(ko[a], e.key[a]) - 1 &&
-                   std::int64_t{k[a]} <= std::max<std::int64_t>(ko[a], e.key[a]) + 1;
+          in_box = in_box && c.key[a] >= std::min<std::int64_t>(ko[a], e.key[a]) - 1 &&
+                   c.key[a] <= std::max<std::int64_t>(ko[a], e.key[a]) + 1;
         if (in_box && segment_distance2(o, s.end, c.centre) <= r2) near.push_back(&c);
       }
       if (near.empty()) continue;
@@ -366,32 +365,20 @@ class VoxelTally {
     for (const Crossing& x : crossings) cross_cell(x.j, x.cell, stamp, witness, on_pass, on_cross);
   }
 
-  // Walks ray s (OctoMap's DDA, as for_each_ray_key) up to the step of the last of `near` (sorted
-  // by step) and adds its crossings of them.
+  // Walks ray s up to the step of the last of `near` (sorted by step) and adds its crossings of
+  // them.
   template <class Key>
   static void walk_to_cells(const Grid<Key>& grid, const Point3f& o, const Stop& s,
                             const std::vector<const SeenCell*>& near,
                             std::vector<Crossing>& crossings) {
-    RayWalk<Key> w;
-    if (start_ray(grid, o, s.end, w) != RayStart::walk) return;
+    const std::uint32_t last = near.back()->step;
     std::size_t next = 0;
-    auto visit = [&](const Key& k, std::uint32_t step) {
+    std::uint32_t step = 0;
+    for_each_ray_key(grid, o, s.end, [&](const Key& k) {
       while (next < near.size() && near[next]->step < step) ++next;
       for (std::size_t i = next; i < near.size() && near[i]->step == step; ++i)
         if (near[i]->packed == k.pack()) crossings.push_back(Crossing{s.j, step, near[i]->cell});
-    };
-    visit(w.origin, 0);
-    const std::uint32_t last = near.back()->step;
-    if (last == 0) return;
-    KeyPosition at{{w.origin[0], w.origin[1], w.origin[2]},
-                   {w.step[0], w.step[1], w.step[2]},
-                   {w.end[0], w.end[1], w.end[2]}};
-    std::uint32_t step = 0;
-    walk_ray(w.state, at, [&](const KeyPosition& p) {
-      if (!p.in_range(Key::extent)) return false;
-      using I = typename Key::index_type;
-      visit(Key(static_cast<I>(p.k[0]), static_cast<I>(p.k[1]), static_cast<I>(p.k[2])), ++step);
-      return step < last;
+      return step++ < last;
     });
   }
 

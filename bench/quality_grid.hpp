@@ -16,8 +16,8 @@
 //   knn2022c     knn2022 (first pass) given the 4 m crop like the other models: no point lies
 //                beyond its inner range, so its weak outer rays are gone
 //   robust       RobustModel with its defaults, whatever they are at the time, or with --variant
-//                NAME one of its rule variants (bench/robust_variants.hpp: -witness, +through,
-//                -both, nbsupport), to measure a rule against the defaults on the same cells
+//                NAME one of its rule variants (bench/robust_variants.hpp; kGridVariants names
+//                them), to measure a rule against the defaults on the same cells
 // Then the goals, the "no cliff" figure (the largest change of a model's irrelevant share between
 // neighbouring cells) and one heat-map PNG per model (bench/heat_map.hpp).
 
@@ -120,13 +120,34 @@ inline bool wanted(const std::vector<std::size_t>& subset, std::size_t v) {
   return subset.empty() || std::find(subset.begin(), subset.end(), v) != subset.end();
 }
 
+/// The rule variants the grid's robust column takes (--variant).
+constexpr const char* kGridVariants = "-witness, +through, -both, nbsupport, +floor";
+
+/// f(the robust column's model): the defaults (empty name) or the variant `name`
+/// (bench/robust_variants.hpp); false, without calling f, for a name not in kGridVariants.
+template <class F>
+bool with_robust_variant(const std::string& name, F&& f) {
+  if (name.empty())
+    f(RobustModel{});
+  else if (name == "-witness")
+    f(BasicRobustModel<SeeThroughPerKeyframe>{});
+  else if (name == "+through")
+    f(BasicRobustModel<RaysThroughBelieved>{});
+  else if (name == "-both")
+    f(BasicRobustModel<PerKeyframeAndThrough>{});
+  else if (name == "nbsupport")
+    f(BasicRobustModel<NbSupport>{});
+  else if (name == "+floor")
+    f(BasicRobustModel<FloorSeenThrough>{});
+  else
+    return false;
+  return true;
+}
+
 inline int run_grid(const GridOptions& opt) {
-  if (!opt.variant.empty() && opt.variant != "-witness" && opt.variant != "+through" &&
-      opt.variant != "-both" && opt.variant != "nbsupport") {
-    std::fprintf(stderr,
-                 "bench_robust_model: unknown --variant %s (-witness, +through, -both, "
-                 "nbsupport)\n",
-                 opt.variant.c_str());
+  if (!with_robust_variant(opt.variant, [](const auto&) {})) {
+    std::fprintf(stderr, "bench_robust_model: unknown --variant %s (%s)\n", opt.variant.c_str(),
+                 kGridVariants);
     return 2;
   }
   std::vector<sim::GridCell> cells;
@@ -173,16 +194,8 @@ inline int run_grid(const GridOptions& opt) {
       score_model(kfs, ref, Knn2022Model{}, 0.5, score[c][4], -1.0);
       score_model(kfs, ref, Knn2022Model(knn2022_first_pass(kfs, Knn2022Params{}, kGridCrop)), 0.5,
                   score[c][5]);
-      if (opt.variant == "-witness")
-        score_model(kfs, ref, BasicRobustModel<SeeThroughPerKeyframe>{}, 0.5, score[c][6]);
-      else if (opt.variant == "+through")
-        score_model(kfs, ref, BasicRobustModel<RaysThroughBelieved>{}, 0.5, score[c][6]);
-      else if (opt.variant == "-both")
-        score_model(kfs, ref, BasicRobustModel<PerKeyframeAndThrough>{}, 0.5, score[c][6]);
-      else if (opt.variant == "nbsupport")
-        score_model(kfs, ref, BasicRobustModel<NbSupport>{}, 0.5, score[c][6]);
-      else
-        score_model(kfs, ref, RobustModel{}, 0.5, score[c][6]);
+      with_robust_variant(
+          opt.variant, [&](const auto& model) { score_model(kfs, ref, model, 0.5, score[c][6]); });
     }
     std::fprintf(stderr, "\rgrid: cell %zu of %zu (%s), %.0f s", c + 1, cells.size(),
                  cells[c].name().c_str(), now() - t0);

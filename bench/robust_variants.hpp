@@ -52,6 +52,11 @@ struct PerKeyframeAndThrough : RobustRules {
 struct NbSupport : RobustRules {
   static constexpr MixtureTerms terms{false, true};
 };
+// The strength floor also for points a keyframe has seen through (the model: only for points
+// never seen through).
+struct FloorSeenThrough : RobustRules {
+  static constexpr bool floor_when_seen_through = true;
+};
 // Without independent support (the mixture sees every point with none).
 struct WithoutSupport : RobustRules {
   static constexpr bool support_check = false;  // nothing to check
@@ -115,6 +120,7 @@ std::vector<RobustVariant> robust_variants(bool ablate, MapSim map_sim, MapReal 
   add("+through", BasicRobustModel<RaysThroughBelieved>{});
   add("-both", BasicRobustModel<PerKeyframeAndThrough>{});
   add("nbsupport", BasicRobustModel<NbSupport>{});
+  add("+floor", BasicRobustModel<FloorSeenThrough>{});
   return v;
 }
 

@@ -409,6 +409,62 @@ TEST_CASE("robust model: rays from a point's third detection, evidence of eq 13"
 }
 
 namespace {
+struct FloorSeenThrough : RobustRules {
+  static constexpr bool floor_when_seen_through = true;
+};
+// A lone map point L (id 100) 1 m from a row of ten points 0.1 m apart (k = 1: s 1 against 0.1,
+// so eq 13 rates L below P_w), detected by every keyframe; keyframe `behind` also detects a point
+// 2 m straight behind L (id 200), whose ray sees through L's voxel. Returns L's voxel's log-odds
+// after each keyframe.
+template <class Model>
+std::vector<float> lone_point(Mapper<Model>& m, std::size_t frames, std::size_t behind) {
+  std::vector<float> out;
+  for (std::size_t f = 0; f < frames; ++f) {
+    std::vector<Point3d> pts;
+    std::vector<std::uint64_t> ids;
+    for (int i = 0; i < 10; ++i) {
+      pts.push_back({2.05, 1.05 + 0.1 * i, 0.05});
+      ids.push_back(static_cast<std::uint64_t>(i));
+    }
+    pts.push_back({2.05, 0.05, 0.05});
+    ids.push_back(100);
+    if (f == behind) {
+      pts.push_back({4.05, 0.05, 0.05});
+      ids.push_back(200);
+    }
+    m.insert_keyframe(Point3d{0.05, 0.05, 0.05}, pts, ids);
+    OcKey k;
+    REQUIRE(m.map().grid().point_to_key(pts[10], k));
+    out.push_back(m.map().logodds(k).value_or(0.0f));
+  }
+  return out;
+}
+}  // namespace
+
+TEST_CASE("robust model: the strength floor holds until a keyframe sees through the point") {
+  RobustModelParams params;
+  params.knn.k = 1;
+  Mapper<RobustModel> model(0.1, RobustModel(params));
+  Mapper<BasicRobustModel<FloorSeenThrough>> floored(0.1,
+                                                     BasicRobustModel<FloorSeenThrough>(params));
+  const std::vector<float> a = lone_point(model, 5, 2), b = lone_point(floored, 5, 2);
+  const float floor = static_cast<float>(logodds(params.knn.p_w));
+  // Up to the keyframe that sees through L, both rules add the same: from the second detection on,
+  // P_w (eq 13 alone would add less).
+  for (std::size_t f = 0; f <= 2; ++f) CHECK(a[f] == b[f]);
+  CHECK(a[2] - a[1] == doctest::Approx(floor).epsilon(1e-5));
+  const MapPointLedger::Point* lone = model.model().map_points().find(100);
+  REQUIRE(lone != nullptr);
+  CHECK(model.model().counts(*lone).c == 1);
+  CHECK(lone->believed);
+  // From the next detection on, eq 13 rates L as it is: below the floor, here below 1/2.
+  for (std::size_t f = 3; f < 5; ++f) {
+    CHECK(b[f] - b[f - 1] == doctest::Approx(floor).epsilon(1e-5));
+    CHECK(a[f] - a[f - 1] < 0.0f);
+  }
+}
+
+namespace {
 // A keyframe ray through a believed point: a wall of map points at x = 1 and one map point, id
 // 9999, at x = 2 straight behind the wall point in the voxel at (1.05, 0.05, 0.05), all detected by
 // `frames` keyframes from the same origin; returns the rays cast by the last keyframe.

@@ -19,13 +19,14 @@
 //   - the mixture is used only while its wrong class is less supported by other keyframes' points
 //     than its real class; otherwise it has found no wrong matches, and every point is believed;
 //   - a believed point's detection adds the paper's eq 13 log-odds of its s (from two detections
-//     on never below P_w) and, from its third detection on, casts a free ray unless the ray would
-//     cross a voxel holding another believed point: such a ray contradicts believed structure, and
-//     which of the two is wrong is the mixture's to decide from the see-through it counts, not the
-//     ray's to settle by carving (a wrong match re-detected behind a real surface otherwise carves
-//     the surface and the space behind it); while the mixture has found no wrong class there is
-//     nothing to decide and every such ray is cast; the first detection that finds it believed
-//     adds its earlier detections' evidence too;
+//     on never below P_w while no keyframe has seen through its voxel) and, from its third
+//     detection on, casts a free ray unless the ray would cross a voxel holding another believed
+//     point: such a ray contradicts believed structure, and which of the two is wrong is the
+//     mixture's to decide from the see-through it counts, not the ray's to settle by carving (a
+//     wrong match re-detected behind a real surface otherwise carves the surface and the space
+//     behind it); while the mixture has found no wrong class there is nothing to decide and every
+//     such ray is cast; the first detection that finds it believed adds its earlier detections'
+//     evidence too;
 //   - one keyframe's endpoints in a voxel add their mean, not their sum (eq 15 bounded), also
 //     when their evidence is added later;
 //   - a point that stops being believed takes its evidence back from its voxel (a voxel left
@@ -96,6 +97,10 @@ struct RobustRules {
   /// Free rays that would cross a voxel holding another believed point are cast too (false: not
   /// cast; measured as witness_once).
   static constexpr bool rays_through_believed = false;
+  /// The strength floor P_w (from two detections on) holds only while no keyframe has seen
+  /// through the point's voxel; then eq 13 of its s rates it as it is (no constant; true: the floor
+  /// for every believed point, the rule before; docs/robust_model.md measures both).
+  static constexpr bool floor_when_seen_through = false;
   /// What the mixture sees of a map point. The SLAM system's count of keyframes observing the
   /// point stands in for the detections when it is larger (keyframes not given to the mapper).
   static PointCounts counts(const MapPointLedger::Point& p, const VoxelTally& tally) {
@@ -173,7 +178,7 @@ class BasicRobustModel {
         ratings[j] = EndpointRating{0.0f, false};
         continue;
       }
-      const double l = strength(kf.tracker, id, dist, p.views) * (p.believed ? share : p.shares);
+      const double l = strength(kf.tracker, id, dist, p) * (p.believed ? share : p.shares);
       ratings[j] = EndpointRating{static_cast<float>(l), p.views >= Rules::ray_detections};
     }
     if (kf.has_ids) see_through(kf, ratings);
@@ -210,7 +215,7 @@ class BasicRobustModel {
         take_back(p, map);
         return;
       }
-      const float l = static_cast<float>(strength(kf.tracker, id, dist, p.views) * p.shares);
+      const float l = static_cast<float>(strength(kf.tracker, id, dist, p) * p.shares);
       if (p.has_key) map.update(Key::unpack(p.key), l);
       p.added = l;
       set_believed(p, true);
@@ -313,14 +318,18 @@ class BasicRobustModel {
   }
 
   // Eq 13 for the point's s; from two detections on never below P_w (a point two keyframes agree
-  // on is not pushed to free); one detection: the paper's rating as it is.
+  // on is not pushed to free) while no keyframe has seen through its voxel (a see-through
+  // contradicts that agreement, and the paper's s decides); otherwise the paper's rating as it is.
   template <class Tracker>
   double strength(const Tracker& tracker, std::uint64_t id, const RunningNormal& dist,
-                  std::uint32_t views) const {
+                  const MapPointLedger::Point& p) const {
     const double s =
         tracker.contains(id) ? tracker.s(id) : std::numeric_limits<double>::quiet_NaN();
     const double l = logodds(knn_.probability(s, dist));
-    return views >= 2 ? std::max(l, floor_) : l;
+    const bool floored =
+        p.views >= 2 && (Rules::floor_when_seen_through || p.voxel == VoxelTally::kNone ||
+                         tally_.passes_at(p.voxel) == 0);
+    return floored ? std::max(l, floor_) : l;
   }
 
   // in_voxel_[j]: this keyframe's rated endpoints in endpoint j's voxel.

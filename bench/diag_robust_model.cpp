@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <string>
 #include <unordered_map>
@@ -146,14 +147,20 @@ void real_set(const std::string& dir, double res) {
 // What score_heldout walks: the held-out rays to points >= min_views held-out keyframes observe,
 // shortened by the margin; those that cross one of `voxels` add to the figures.
 struct RaysThrough {
-  std::size_t rays = 0, believed_ends = 0;
-  Quartiles length, past;
+  std::size_t rays = 0, crossings = 0, believed_ends = 0, doubted_ends = 0;
+  Quartiles length;       // per ray
+  Quartiles past, aside;  // per crossing: voxel centre to the ray's point; ray to the nearest
+                          // believed point in the voxel
 };
 void rays_through(const std::vector<eval::IdKeyframe>& kfs, const std::vector<std::size_t>& held,
                   const std::unordered_set<OcKey, KeyHash>& voxels,
                   const Mapper<RobustModel>& mapper, const eval::HeldoutOptions& opt,
                   RaysThrough& out) {
   const RobustModel& m = mapper.model();
+  std::unordered_map<std::uint64_t, std::vector<Point3d>> believed;  // voxel -> its believed points
+  m.map_points().for_each([&](std::uint64_t, const MapPointLedger::Point& p) {
+    if (p.has_key && p.believed) believed[p.key].push_back(p.position);
+  });
   std::unordered_map<std::uint64_t, std::uint32_t> views;
   for (const std::size_t i : held) {
     std::unordered_set<std::uint64_t> once(kfs[i].ids.begin(), kfs[i].ids.end());
@@ -162,26 +169,38 @@ void rays_through(const std::vector<eval::IdKeyframe>& kfs, const std::vector<st
   const Grid<OcKey>& g = mapper.map().grid();
   for (const std::size_t i : held) {
     const eval::IdKeyframe& kf = kfs[i];
+    const Point3d& o = kf.origin;
     for (std::size_t j = 0; j < kf.points.size(); ++j) {
       if (views[kf.ids[j]] < opt.min_views) continue;
       const Point3d& e = kf.points[j];
-      const double dx = e.x - kf.origin.x, dy = e.y - kf.origin.y, dz = e.z - kf.origin.z;
+      const double dx = e.x - o.x, dy = e.y - o.y, dz = e.z - o.z;
       const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
       if (len <= opt.end_margin) continue;
       const double s = (len - opt.end_margin) / len;
-      const Point3d end{kf.origin.x + s * dx, kf.origin.y + s * dy, kf.origin.z + s * dz};
-      for_each_ray_key(g, knnocc::detail::to_point3f(kf.origin), knnocc::detail::to_point3f(end),
-                       [&](const OcKey& k) {
-                         if (!voxels.count(k)) return;
-                         ++out.rays;
-                         out.length.add(len);
-                         const double cx = g.index_to_coord(k[0]) - e.x,
-                                      cy = g.index_to_coord(k[1]) - e.y,
-                                      cz = g.index_to_coord(k[2]) - e.z;
-                         out.past.add(std::sqrt(cx * cx + cy * cy + cz * cz));
-                         const MapPointLedger::Point* p = m.map_points().find(kf.ids[j]);
-                         out.believed_ends += p != nullptr && p->believed;
-                       });
+      const Point3d end{o.x + s * dx, o.y + s * dy, o.z + s * dz};
+      std::size_t crossed = 0;
+      auto cross = [&](const OcKey& k) {
+        if (!voxels.count(k)) return;
+        ++crossed;
+        const double cx = g.index_to_coord(k[0]) - e.x, cy = g.index_to_coord(k[1]) - e.y,
+                     cz = g.index_to_coord(k[2]) - e.z;
+        out.past.add(std::sqrt(cx * cx + cy * cy + cz * cz));
+        double nearest = std::numeric_limits<double>::infinity();
+        for (const Point3d& q : believed[k.pack()]) {
+          const double wx = q.x - o.x, wy = q.y - o.y, wz = q.z - o.z;
+          const double t = (wx * dx + wy * dy + wz * dz) / (len * len);
+          const double ax = wx - t * dx, ay = wy - t * dy, az = wz - t * dz;
+          nearest = std::min(nearest, std::sqrt(ax * ax + ay * ay + az * az));
+        }
+        if (nearest < std::numeric_limits<double>::infinity()) out.aside.add(nearest);
+      };
+      for_each_ray_key(g, knnocc::detail::to_point3f(o), knnocc::detail::to_point3f(end), cross);
+      if (crossed == 0) continue;
+      ++out.rays;
+      out.crossings += crossed;
+      out.length.add(len);
+      const MapPointLedger::Point* p = m.map_points().find(kf.ids[j]);
+      if (p != nullptr) ++(p->believed ? out.believed_ends : out.doubted_ends);
     }
   }
 }
@@ -189,7 +208,8 @@ void rays_through(const std::vector<eval::IdKeyframe>& kfs, const std::vector<st
 // The held-out contradictions the robust model leaves on a real set at a 0.3 m margin (5 folds,
 // 4 m crop): its seen-through voxels, how many OctoMap's fold maps also have, the most-detected
 // believed point in each, and the held-out rays through them (length, distance from the voxel's
-// centre to the ray's point, whether the model believes the point).
+// centre to the ray's point, how far from the believed points there it passes, whether the model
+// believes its point).
 void heldout_left(const std::string& dir, double res) {
   if (!std::filesystem::is_directory(dir)) return;
   const io::Sequence seq = io::Sequence::open(dir);
@@ -237,10 +257,13 @@ void heldout_left(const std::string& dir, double res) {
   std::printf(
       "  held-out contradictions left at a 0.3 m margin (5 folds, 4 m crop): %zu voxels, %zu of "
       "them also in OctoMap's maps;\n    detections of the most-detected believed point in each "
-      "%s (quartiles, range);\n    %zu held-out rays through them, %zu ending at a point the "
-      "model believes; length %s m, voxel to point %s m\n",
-      left, also_octomap, most_detected.with_range().c_str(), rays.rays, rays.believed_ends,
-      rays.length.with_range().c_str(), rays.past.with_range().c_str());
+      "%s (quartiles, range);\n    %zu held-out rays through them (%zu crossings), ending at a "
+      "point the model believes %zu, doubts %zu, never saw %zu; length %s m;\n    per crossing, "
+      "voxel centre to the ray's point %s m, ray to the nearest believed point in the voxel %s m\n",
+      left, also_octomap, most_detected.with_range().c_str(), rays.rays, rays.crossings,
+      rays.believed_ends, rays.doubted_ends, rays.rays - rays.believed_ends - rays.doubted_ends,
+      rays.length.with_range().c_str(), rays.past.with_range().c_str(),
+      rays.aside.with_range().c_str());
 }
 
 }  // namespace

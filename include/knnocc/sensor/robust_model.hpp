@@ -320,6 +320,8 @@ class BasicRobustModel {
   // Eq 13 for the point's s; from two detections on never below P_w (a point two keyframes agree
   // on is not pushed to free) while no keyframe has seen through its voxel (a see-through
   // contradicts that agreement, and the paper's s decides); otherwise the paper's rating as it is.
+  // A keyframe's see-throughs are counted after its ratings: the keyframe that first sees through
+  // the voxel still rates its own detections there with the floor.
   template <class Tracker>
   double strength(const Tracker& tracker, std::uint64_t id, const RunningNormal& dist,
                   const MapPointLedger::Point& p) const {

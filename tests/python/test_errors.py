@@ -78,11 +78,21 @@ def test_bad_mapper_arguments(knnocc):
                           ("knn", {"margin_scale": 2}), ("knn", {"k": 0}), ("knn", {"k": 5000}),
                           ("knn", {"p_w": 0.5}), ("knn", {"w": 9}), ("robust", {"margin_scale": -1}),
                           ("octomap", {"threads": 0}), ("octomap", {"max_range": 0}),
-                          ("octomap", {"clamp_min": 0.6}), ("knn", {"discretize": True})]:
+                          ("octomap", {"clamp_min": 0.6}), ("knn", {"discretize": True}),
+                          ("knn2022", {"w": 0}), ("knn2022", {"margin_scale": 2}),
+                          ("knn2022", {"k": 0}), ("knn2022", {"p_near": 0.3}),
+                          ("knn2022", {"p_miss": 0.5}), ("knn2022", {"mu": -1, "sigma": 1}),
+                          ("knn", {"inner_range": 4})]:
         with pytest.raises(ValueError):
             knnocc.Mapper(0.1, model=model, **params)
-    with pytest.raises(ValueError, match="robust"):
-        knnocc.LiveMapper(0.1, model="robust")
+    with pytest.raises(ValueError, match="mu and sigma go together"):
+        knnocc.Mapper(0.1, model="knn2022", mu=0.1)
+    for model in ["robust", "knn2022"]:
+        with pytest.raises(ValueError, match="robust"):
+            knnocc.LiveMapper(0.1, model=model)
+    for k, inner_range in [(0, 4.0), (5000, 4.0), (24, 0.0)]:
+        with pytest.raises(ValueError):
+            knnocc.Knn2022FirstPass(k, inner_range)
     mapper = knnocc.Mapper(0.1, model="knn")
     for ids in [np.arange(3), np.arange(4.0), [-1, 0, 1, 2], np.zeros((4, 1), int), "abcd"]:
         with pytest.raises(ValueError, match="ids"):

@@ -1,5 +1,6 @@
 """Maps built through Python equal the knnocc tool's, byte for byte (.bt and .ot), for the same
-input fed the way the tool feeds the library: OctoMap, k-NN and robust models, live corrections,
+input fed the way the tool feeds the library: OctoMap, k-NN, robust and 2022 models (the 2022
+model with its first pass's statistics and with running ones), live corrections,
 a single point file; queries agree with the tool's voxel list; read_points reads every cloud
 format the tool writes. Generated data (`knnocc sim`); the same on real data: test_real_data.py."""
 
@@ -33,6 +34,25 @@ def test_mapper_equals_the_tool(knnocc, drift_scene, tmp_path, model):
         assert f"{ours['mu']:.6f} {ours['sigma']:.6f}" == f"{theirs['mu']:.6f} {theirs['sigma']:.6f}"
     else:
         assert mapper.statistics() == {}
+
+
+@pytest.mark.parametrize("stats", ["first-pass", "online"])
+def test_knn2022_mapper_equals_the_tool(knnocc, drift_scene, tmp_path, stats):
+    truth = drift_scene / "truth"
+    bt, ot, out = tool_map(tmp_path, f"knn2022_{stats}", "--input", truth, "--model", "knn2022",
+                           "--stats", stats, "--res", 0.1)
+    params = {}
+    if stats == "first-pass":
+        first = knnocc.Knn2022FirstPass()
+        for pose, points, _ in knnocc.read_sequence(truth):
+            first.add(pose[:3, 3], knnocc.to_world(pose, points))
+        assert first.count > 0
+        assert f"mu {first.mu:.6f} sigma {first.sigma:.6f}" in out  # the tool's own first pass
+        params = {"mu": first.mu, "sigma": first.sigma}
+    mapper = map_sequence(knnocc, truth, 0.1, model="knn2022", **params)  # whole clouds
+    assert mapper.map.to_bytes("bt") == bt
+    assert mapper.map.to_bytes("ot") == ot
+    assert mapper.statistics() == {}
 
 
 @pytest.mark.parametrize("model", ["octomap", "knn"])

@@ -1,4 +1,4 @@
-// Python's Mapper (one keyframe at a time, paper Alg. 3, any of the three models) and LiveMapper
+// Python's Mapper (one keyframe at a time, paper Alg. 3, any of the four models) and LiveMapper
 // (keyframes added, re-posed and removed under SLAM corrections; the map stays exact).
 
 #include <deque>
@@ -45,20 +45,46 @@ bool flag(py::handle v, const std::string& key) {
 constexpr const char* kCommon = "max_range, threads, clamp_min, clamp_max";
 constexpr const char* kOctoMap = "prob_hit, prob_miss, discretize";
 constexpr const char* kKnn = "k, w, p_upper, p_w, p_free, s_limit";
+constexpr const char* kKnn2022 = "k, inner_range, p_near, p_far, p_miss, p_miss_outer, mu, sigma";
+
+// One keyword argument of the 2022 model into p; false for a key it does not take.
+bool knn2022_option(Knn2022Params& p, const std::string& key, py::handle v, bool& mu, bool& sigma) {
+  if (key == "k")
+    p.k = static_cast<std::size_t>(integer(v, key, 1, 4096));
+  else if (key == "inner_range")
+    p.inner_range = number(v);
+  else if (key == "p_near")
+    p.p_near = number(v);
+  else if (key == "p_far")
+    p.p_far = number(v);
+  else if (key == "p_miss")
+    p.p_miss = number(v);
+  else if (key == "p_miss_outer")
+    p.p_miss_outer = number(v);
+  else if (key == "mu")
+    p.mu = number(v), mu = true;
+  else if (key == "sigma")
+    p.sigma = number(v), sigma = true;
+  else
+    return false;
+  return true;
+}
 
 // The keyword arguments of Mapper / LiveMapper for `model`; ValueError for a model or a
 // parameter it does not take, TypeError for a value of the wrong type.
 ModelOptions options_in(const char* cls, const std::string& model, const py::kwargs& kw,
                         bool live) {
-  const bool octomap = model == "octomap", knn = model == "knn", robust = model == "robust";
-  if (!(octomap || knn || (robust && !live)))
+  const bool octomap = model == "octomap", knn = model == "knn", robust = model == "robust",
+             knn2022 = model == "knn2022";
+  if (!(octomap || knn || ((robust || knn2022) && !live)))
     throw py::value_error(std::string(cls) + ": model must be " +
-                          (live ? "'octomap' or 'knn' (the live mapper does not take the robust "
-                                  "model)"
-                                : "'octomap', 'knn' or 'robust'") +
+                          (live ? "'octomap' or 'knn' (the live mapper takes neither the robust "
+                                  "model nor the 2022 one)"
+                                : "'octomap', 'knn', 'knn2022' or 'robust'") +
                           ", got '" + model + "'");
   ModelOptions o;
   double clamp_min = 0.1192, clamp_max = 0.971;
+  bool mu = false, sigma = false;  // the 2022 model's fixed statistics: both or neither
   for (const auto& item : kw) {
     const std::string key = py::str(item.first);
     const py::handle v = item.second;
@@ -76,25 +102,33 @@ ModelOptions options_in(const char* cls, const std::string& model, const py::kwa
       o.prob_miss = number(v);
     else if (octomap && key == "discretize")
       o.mapper.discretize = flag(v, key);
-    else if (!octomap && key == "k")
+    else if ((knn || robust) && key == "k")
       o.knn.k = static_cast<std::size_t>(integer(v, key, 1, 4096));
-    else if (!octomap && key == "w")
+    else if ((knn || robust) && key == "w")
       o.knn.w = number(v);
-    else if (!octomap && key == "p_upper")
+    else if ((knn || robust) && key == "p_upper")
       o.knn.p_upper = number(v);
-    else if (!octomap && key == "p_w")
+    else if ((knn || robust) && key == "p_w")
       o.knn.p_w = number(v);
-    else if (!octomap && key == "p_free")
+    else if ((knn || robust) && key == "p_free")
       o.knn.p_free = number(v);
-    else if (!octomap && key == "s_limit")
+    else if ((knn || robust) && key == "s_limit")
       o.knn.s_limit = number(v);
     else if (robust && key == "margin_scale")
       o.margin_scale = number(v);
-    else
+    else if (knn2022 && !knn2022_option(o.knn2022, key, v, mu, sigma))
+      throw py::value_error(std::string(cls) + "(model='" + model + "'): unknown parameter '" +
+                            key + "' (takes " + kCommon + ", " + kKnn2022 + ")");
+    else if (!knn2022)
       throw py::value_error(std::string(cls) + "(model='" + model + "'): unknown parameter '" +
                             key + "' (takes " + kCommon + ", " + (octomap ? kOctoMap : kKnn) +
                             (robust ? ", margin_scale" : "") + ")");
   }
+  if (mu != sigma)
+    throw py::value_error(std::string(cls) +
+                          "(model='knn2022'): mu and sigma go together (a first pass's "
+                          "statistics; neither: running ones)");
+  o.knn2022.fixed_statistics = mu;
   o.mapper.occupancy = occupancy_params(clamp_min, clamp_max);
   return o;
 }
@@ -164,6 +198,10 @@ Keyword parameters, by model (defaults in brackets):
   'knn'          k [8], w [0], p_upper [0.9], p_w [0.65], p_free [0.4], s_limit [inf]: the
                  paper's eq 13-15 (docs/library.md, "The k-NN model and the mapper")
   'robust'       the 'knn' parameters and margin_scale [2] (Mapper only)
+  'knn2022'      k [24], inner_range [4], p_near [0.97], p_far [0.45], p_miss [0.4],
+                 p_miss_outer [0.45]; mu and sigma: fixed statistics (Knn2022FirstPass), or
+                 neither for running ones (Mapper only; give it whole clouds: it cuts at
+                 inner_range itself)
 ValueError for an unknown model or parameter, or a value out of range.)";
 
 constexpr const char* kMapperDoc =
@@ -176,6 +214,7 @@ Mapper(resolution, model="octomap", **params)
                    nearest map points (sparse visual-SLAM keyframes)
   model="robust"   beyond the paper: map points believed real under a mixture fitted to the
                    sequence (ORB-SLAM keyframes with map-point ids)
+  model="knn2022"  the authors' 2022 model (Sensors 22(1):139), a baseline to compare with
 
   mapper = knnocc.Mapper(0.1, model="knn", k=8)
   for pose, points, ids in knnocc.read_sequence("keyframes"):
@@ -206,6 +245,7 @@ void bind_mappers(py::module_& m) {
                const ModelOptions o = options_in("Mapper", model, kw, false);
                if (model == "octomap") return MapperRef{make_octomap_mapper(resolution, o), model};
                if (model == "knn") return MapperRef{make_knn_mapper(resolution, o), model};
+               if (model == "knn2022") return MapperRef{make_knn2022_mapper(resolution, o), model};
                return MapperRef{make_robust_mapper(resolution, o), model};
              }),
              py::arg("resolution"), py::arg("model") = "octomap",
@@ -228,11 +268,11 @@ void bind_mappers(py::module_& m) {
 position, 3 numbers); `ids` one map-point id per point (e.g. ORB-SLAM's MapPoint::mnId) or None.
 The map point cloud is the union of the keyframes' points: an id joins once, at its first
 position; without ids every point is a new map point. A sequence gives ids always or never
-(ValueError otherwise). The OctoMap model ignores ids. `evidence`: None or (N, 3) integers, the
-SLAM system's found, visible and observations counts per point (Sequence.evidence(i) reads them
-from PLY clouds), which the robust model uses; the others ignore them. MemoryError past
-memory_limit.)");
-  bind_owner_members(mapper, "Mapper", "'octomap', 'knn' or 'robust'.");
+(ValueError otherwise). The OctoMap and 2022 models ignore ids. `evidence`: None or (N, 3)
+integers, the SLAM system's found, visible and observations counts per point
+(Sequence.evidence(i) reads them from PLY clouds), which the robust model uses; the others ignore
+them. MemoryError past memory_limit.)");
+  bind_owner_members(mapper, "Mapper", "'octomap', 'knn', 'knn2022' or 'robust'.");
 
   py::class_<LiveRef> live(m, "LiveMapper", (std::string(kLiveDoc) + kParamsDoc).c_str());
   live.def(py::init([](double resolution, const std::string& model, const py::kwargs& kw) {

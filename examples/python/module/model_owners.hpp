@@ -19,7 +19,16 @@ class MapperOf final : public MapperOwner {
   void insert_keyframe(const Point3d& origin, const PointsView& points,
                        const std::vector<std::uint64_t>& ids,
                        const std::vector<PointEvidence>& evidence) override {
-    points.visit([&](const auto& span) { mapper_.insert_keyframe(origin, span, ids, evidence); });
+    if constexpr (Mapper<Model>::rates_cloud) {  // float world points, as the tool gives them
+      floats_.clear();
+      points.visit([&](const auto& span) {
+        for (std::size_t i = 0; i < span.size(); ++i)
+          floats_.push_back(knnocc::detail::to_point3f(span[i]));
+      });
+      mapper_.insert_keyframe(origin, floats_);
+    } else {
+      points.visit([&](const auto& span) { mapper_.insert_keyframe(origin, span, ids, evidence); });
+    }
   }
   TrackerStats statistics() const override {
     if constexpr (Mapper<Model>::uses_map_cloud)
@@ -29,7 +38,8 @@ class MapperOf final : public MapperOwner {
   }
 
  private:
-  Mapper<Model> mapper_;  // not movable: this object is made in place and never moves
+  Mapper<Model> mapper_;         // not movable: this object is made in place and never moves
+  std::vector<Point3f> floats_;  // the 2022 model's float points
 };
 
 template <class Model>

@@ -223,6 +223,7 @@ limit MemoryError.)";
   bind_map(m);
   bind_mappers(m);
   bind_io(m);
+  bind_knn2022(m);
 
   m.def(
       "_last_points_input",

@@ -21,6 +21,7 @@
 #include <knnocc/live/live_mapper.hpp>
 #include <knnocc/map/occupancy_map.hpp>
 #include <knnocc/mapper.hpp>
+#include <knnocc/sensor/knn2022_model.hpp>
 #include <knnocc/sensor/knn_model.hpp>
 
 #include "../../cli/eigen_pose.hpp"
@@ -37,6 +38,7 @@ struct ModelOptions {
   double prob_hit = 0.7, prob_miss = 0.4;  ///< OctoMap model
   KnnModelParams knn;                      ///< k-NN and robust models
   double margin_scale = 2.0;               ///< robust model (RobustModelParams)
+  Knn2022Params knn2022;                   ///< the authors' 2022 model
   MapperOptions mapper;                    ///< max_range, discretize, threads, clamping
 };
 
@@ -85,7 +87,7 @@ class MapObject : public MapOwner {
 /// std::invalid_argument on bad probabilities.
 std::shared_ptr<MapObject> make_map_object(Map map, double prob_hit, double prob_miss);
 
-/// Mapper<Model> for one of the three models.
+/// Mapper<Model> for one of the four models.
 class MapperOwner : public MapOwner {
  public:
   /// `ids` and `evidence` (the SLAM counters) each empty or one per point.
@@ -97,6 +99,7 @@ class MapperOwner : public MapOwner {
 std::shared_ptr<MapperOwner> make_octomap_mapper(double resolution, const ModelOptions& o);
 std::shared_ptr<MapperOwner> make_knn_mapper(double resolution, const ModelOptions& o);
 std::shared_ptr<MapperOwner> make_robust_mapper(double resolution, const ModelOptions& o);
+std::shared_ptr<MapperOwner> make_knn2022_mapper(double resolution, const ModelOptions& o);
 
 /// LiveMapper<Model, OcKey, Pose> for the OctoMap and k-NN models.
 class LiveOwner : public MapOwner {

@@ -69,6 +69,7 @@ def test_everything_has_a_docstring(knnocc):
 
 
 @pytest.mark.parametrize("needle", ["model=\"octomap\"", "'knn'", "k [8]", "margin_scale [2]",
+                                    "'knn2022'", "inner_range [4]", "Knn2022FirstPass",
                                     "insert_keyframe", "statistics", "max_range"])
 def test_help_of_mapper_is_useful(knnocc, needle):
     assert needle in pydoc.render_doc(knnocc.Mapper, renderer=pydoc.plaintext)

@@ -144,8 +144,8 @@ void real_set(const std::string& dir, double res) {
     kind.print((std::to_string(views) + (views == 10 ? "+" : "") + " detections").c_str());
 }
 
-// What score_heldout walks: the held-out rays to points >= min_views held-out keyframes observe,
-// shortened by the margin; those that cross one of `voxels` add to the figures.
+// The held-out rays through the map's seen-through voxels (eval::for_each_seen_through, the walk
+// score_heldout counts them with).
 struct RaysThrough {
   std::size_t rays = 0, crossings = 0, believed_ends = 0, doubted_ends = 0;
   Quartiles length;       // per ray
@@ -153,7 +153,6 @@ struct RaysThrough {
                           // believed point in the voxel
 };
 void rays_through(const std::vector<eval::IdKeyframe>& kfs, const std::vector<std::size_t>& held,
-                  const std::unordered_set<OcKey, KeyHash>& voxels,
                   const Mapper<RobustModel>& mapper, const eval::HeldoutOptions& opt,
                   RaysThrough& out) {
   const RobustModel& m = mapper.model();
@@ -161,48 +160,34 @@ void rays_through(const std::vector<eval::IdKeyframe>& kfs, const std::vector<st
   m.map_points().for_each([&](std::uint64_t, const MapPointLedger::Point& p) {
     if (p.has_key && p.believed) believed[p.key].push_back(p.position);
   });
-  std::unordered_map<std::uint64_t, std::uint32_t> views;
-  for (const std::size_t i : held) {
-    std::unordered_set<std::uint64_t> once(kfs[i].ids.begin(), kfs[i].ids.end());
-    for (const std::uint64_t id : once) ++views[id];
-  }
   const Grid<OcKey>& g = mapper.map().grid();
-  for (const std::size_t i : held) {
-    const eval::IdKeyframe& kf = kfs[i];
-    const Point3d& o = kf.origin;
-    for (std::size_t j = 0; j < kf.points.size(); ++j) {
-      if (views[kf.ids[j]] < opt.min_views) continue;
-      const Point3d& e = kf.points[j];
-      const double dx = e.x - o.x, dy = e.y - o.y, dz = e.z - o.z;
-      const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
-      if (len <= opt.end_margin) continue;
-      const double s = (len - opt.end_margin) / len;
-      const Point3d end{o.x + s * dx, o.y + s * dy, o.z + s * dz};
-      std::size_t crossed = 0;
-      auto cross = [&](const OcKey& k) {
-        if (!voxels.count(k)) return;
-        ++crossed;
-        const double cx = g.index_to_coord(k[0]) - e.x, cy = g.index_to_coord(k[1]) - e.y,
-                     cz = g.index_to_coord(k[2]) - e.z;
-        out.past.add(std::sqrt(cx * cx + cy * cy + cz * cz));
-        double nearest = std::numeric_limits<double>::infinity();
-        for (const Point3d& q : believed[k.pack()]) {
-          const double wx = q.x - o.x, wy = q.y - o.y, wz = q.z - o.z;
-          const double t = (wx * dx + wy * dy + wz * dz) / (len * len);
-          const double ax = wx - t * dx, ay = wy - t * dy, az = wz - t * dz;
-          nearest = std::min(nearest, std::sqrt(ax * ax + ay * ay + az * az));
-        }
-        if (nearest < std::numeric_limits<double>::infinity()) out.aside.add(nearest);
-      };
-      for_each_ray_key(g, knnocc::detail::to_point3f(o), knnocc::detail::to_point3f(end), cross);
-      if (crossed == 0) continue;
+  std::size_t ray_kf = kfs.size(), ray_point = 0;  // the ray being walked
+  auto cross = [&](std::size_t i, std::size_t j, const OcKey& k) {
+    const Point3d& o = kfs[i].origin;
+    const Point3d& e = kfs[i].points[j];
+    const double dx = e.x - o.x, dy = e.y - o.y, dz = e.z - o.z;
+    const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (i != ray_kf || j != ray_point) {  // a ray's crossings come one after another
+      ray_kf = i, ray_point = j;
       ++out.rays;
-      out.crossings += crossed;
       out.length.add(len);
-      const MapPointLedger::Point* p = m.map_points().find(kf.ids[j]);
+      const MapPointLedger::Point* p = m.map_points().find(kfs[i].ids[j]);
       if (p != nullptr) ++(p->believed ? out.believed_ends : out.doubted_ends);
     }
-  }
+    ++out.crossings;
+    const double cx = g.index_to_coord(k[0]) - e.x, cy = g.index_to_coord(k[1]) - e.y,
+                 cz = g.index_to_coord(k[2]) - e.z;
+    out.past.add(std::sqrt(cx * cx + cy * cy + cz * cz));
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Point3d& q : believed[k.pack()]) {
+      const double wx = q.x - o.x, wy = q.y - o.y, wz = q.z - o.z;
+      const double t = (wx * dx + wy * dy + wz * dz) / (len * len);
+      const double ax = wx - t * dx, ay = wy - t * dy, az = wz - t * dz;
+      nearest = std::min(nearest, std::sqrt(ax * ax + ay * ay + az * az));
+    }
+    if (nearest < std::numeric_limits<double>::infinity()) out.aside.add(nearest);
+  };
+  eval::for_each_seen_through(mapper.map(), kfs, held, eval::heldout_points(kfs, held), opt, cross);
 }
 
 // The held-out contradictions the robust model leaves on a real set at a 0.3 m margin (5 folds,
@@ -241,7 +226,6 @@ void heldout_left(const std::string& dir, double res) {
     eval::score_heldout(robust.map(), kfs, held, opt, &st);
     eval::score_heldout(octomap.map(), kfs, held, opt, &st_octomap);
     const std::unordered_set<OcKey, KeyHash> in_octomap(st_octomap.begin(), st_octomap.end());
-    const std::unordered_set<OcKey, KeyHash> voxels(st.begin(), st.end());
     const RobustModel& m = robust.model();
     std::unordered_map<std::uint64_t, std::uint32_t> top;  // voxel -> most detections, believed
     m.map_points().for_each([&](std::uint64_t, const MapPointLedger::Point& p) {
@@ -252,7 +236,7 @@ void heldout_left(const std::string& dir, double res) {
       also_octomap += in_octomap.count(k);
       most_detected.add(top.count(k.pack()) ? top[k.pack()] : 0);
     }
-    rays_through(kfs, held, voxels, robust, opt, rays);
+    rays_through(kfs, held, robust, opt, rays);
   }
   std::printf(
       "  held-out contradictions left at a 0.3 m margin (5 folds, 4 m crop): %zu voxels, %zu of "

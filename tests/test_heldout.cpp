@@ -157,6 +157,21 @@ TEST_CASE("heldout: recall and seen-through voxels equal a brute force with dens
       CHECK_MESSAGE(near, "a walked voxel that no ray comes near");
     }
     CHECK(s.occupied == map.count_voxels().occupied);
+    // The walk behind the score, crossing by crossing: held-out keyframes' rays to scored points,
+    // occupied voxels only, the same voxels and the same ray count.
+    std::set<std::uint64_t> crossed;
+    bool only_scored = true;
+    const std::size_t walked_rays = eval::for_each_seen_through(
+        map, kfs, heldout, eval::heldout_points(kfs, heldout), opt,
+        [&](std::size_t i, std::size_t j, const OcKey& k) {
+          only_scored = only_scored && std::count(heldout.begin(), heldout.end(), i) == 1 &&
+                        observers.at(kfs[i].ids[j]).size() >= opt.min_views &&
+                        map.is_occupied(k).value_or(false);
+          crossed.insert(k.pack());
+        });
+    CHECK(only_scored);
+    CHECK(walked_rays == rays);
+    CHECK(crossed == walked_set);
     total_through += s.seen_through;
     total_recalled += s.recalled;
   }

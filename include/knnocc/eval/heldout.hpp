@@ -82,18 +82,19 @@ inline std::vector<std::size_t> fold_indices(std::size_t keyframes, std::size_t 
   return out;
 }
 
-/// Scores `map` against the held-out keyframes `heldout` (indices into `keyframes`);
-/// `seen_through` (optional) receives the seen-through voxels.
-template <class Key>
-HeldoutScore score_heldout(const OccupancyMap<Key>& map, const std::vector<IdKeyframe>& keyframes,
-                           const std::vector<std::size_t>& heldout, const HeldoutOptions& opt = {},
-                           std::vector<Key>* seen_through = nullptr) {
-  struct Seen {
-    Point3d position;
-    std::uint32_t views = 0;
-    std::size_t last = static_cast<std::size_t>(-1);  // keyframe that counted it last
-  };
-  std::unordered_map<std::uint64_t, Seen> seen;
+/// Where each held-out map point was first observed and by how many of the held-out keyframes
+/// (an id counts once per keyframe).
+struct HeldoutPoint {
+  Point3d position;
+  std::uint32_t views = 0;
+  std::size_t last = static_cast<std::size_t>(-1);  // keyframe that counted it last
+};
+using HeldoutPoints = std::unordered_map<std::uint64_t, HeldoutPoint>;
+
+/// The map points of keyframes[heldout] and their views.
+inline HeldoutPoints heldout_points(const std::vector<IdKeyframe>& keyframes,
+                                    const std::vector<std::size_t>& heldout) {
+  HeldoutPoints seen;
   for (const std::size_t i : heldout) {
     const IdKeyframe& kf = keyframes[i];
     for (std::size_t j = 0; j < kf.points.size() && j < kf.ids.size(); ++j) {
@@ -103,6 +104,48 @@ HeldoutScore score_heldout(const OccupancyMap<Key>& map, const std::vector<IdKey
       it->second.last = i;
     }
   }
+  return seen;
+}
+
+/// Walks the rays the score walks (held-out keyframe i's ray to its point j, for points `points`
+/// says min_views held-out keyframes observe, stopped end_margin short) and calls f(i, j, key) for
+/// every occupied voxel of `map` each passes before its end voxel; returns the rays walked.
+template <class Key, class F>
+std::size_t for_each_seen_through(const OccupancyMap<Key>& map,
+                                  const std::vector<IdKeyframe>& keyframes,
+                                  const std::vector<std::size_t>& heldout,
+                                  const HeldoutPoints& points, const HeldoutOptions& opt, F&& f) {
+  std::size_t rays = 0;
+  const Grid<Key>& g = map.grid();
+  for (const std::size_t i : heldout) {
+    const IdKeyframe& kf = keyframes[i];
+    const Point3f o = knnocc::detail::to_point3f(kf.origin);
+    for (std::size_t j = 0; j < kf.points.size() && j < kf.ids.size(); ++j) {
+      if (points.at(kf.ids[j]).views < opt.min_views) continue;
+      ++rays;
+      Point3d end = kf.points[j];
+      if (opt.end_margin > 0) {
+        const double dx = end.x - kf.origin.x, dy = end.y - kf.origin.y, dz = end.z - kf.origin.z;
+        const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+        if (len <= opt.end_margin) continue;
+        const double s = (len - opt.end_margin) / len;
+        end = {kf.origin.x + s * dx, kf.origin.y + s * dy, kf.origin.z + s * dz};
+      }
+      for_each_ray_key(g, o, knnocc::detail::to_point3f(end), [&](const Key& k) {
+        if (map.is_occupied(k).value_or(false)) f(i, j, k);
+      });
+    }
+  }
+  return rays;
+}
+
+/// Scores `map` against the held-out keyframes `heldout` (indices into `keyframes`);
+/// `seen_through` (optional) receives the seen-through voxels.
+template <class Key>
+HeldoutScore score_heldout(const OccupancyMap<Key>& map, const std::vector<IdKeyframe>& keyframes,
+                           const std::vector<std::size_t>& heldout, const HeldoutOptions& opt = {},
+                           std::vector<Key>* seen_through = nullptr) {
+  const HeldoutPoints seen = heldout_points(keyframes, heldout);
   HeldoutScore s;
   const Grid<Key>& g = map.grid();
   for (const auto& e : seen) {
@@ -112,25 +155,9 @@ HeldoutScore score_heldout(const OccupancyMap<Key>& map, const std::vector<IdKey
     if (g.point_to_key(e.second.position, k)) s.recalled += map.is_occupied(k).value_or(false);
   }
   std::unordered_set<Key, KeyHash> through;
-  for (const std::size_t i : heldout) {
-    const IdKeyframe& kf = keyframes[i];
-    const Point3f o = knnocc::detail::to_point3f(kf.origin);
-    for (std::size_t j = 0; j < kf.points.size() && j < kf.ids.size(); ++j) {
-      if (seen.at(kf.ids[j]).views < opt.min_views) continue;
-      ++s.rays;
-      Point3d end = kf.points[j];
-      if (opt.end_margin > 0) {
-        const double dx = end.x - kf.origin.x, dy = end.y - kf.origin.y, dz = end.z - kf.origin.z;
-        const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
-        if (len <= opt.end_margin) continue;
-        const double f = (len - opt.end_margin) / len;
-        end = {kf.origin.x + f * dx, kf.origin.y + f * dy, kf.origin.z + f * dz};
-      }
-      for_each_ray_key(g, o, knnocc::detail::to_point3f(end), [&](const Key& k) {
-        if (map.is_occupied(k).value_or(false)) through.insert(k);
-      });
-    }
-  }
+  s.rays =
+      for_each_seen_through(map, keyframes, heldout, seen, opt,
+                            [&](std::size_t, std::size_t, const Key& k) { through.insert(k); });
   s.seen_through = through.size();
   if (seen_through) seen_through->assign(through.begin(), through.end());
   s.occupied = map.count_voxels().occupied;

@@ -16,7 +16,7 @@
 //   knn2022c     knn2022 (first pass) given the 4 m crop like the other models: no point lies
 //                beyond its inner range, so its weak outer rays are gone
 //   robust       RobustModel with its defaults, whatever they are at the time, or with --variant
-//                NAME one of its rule variants (bench/robust_variants.hpp; kGridVariants names
+//                NAME one of its variants (bench/robust_variants.hpp, for_each_robust_variant names
 //                them), to measure a rule against the defaults on the same cells
 // Then the goals, the "no cliff" figure (the largest change of a model's irrelevant share between
 // neighbouring cells) and one heat-map PNG per model (bench/heat_map.hpp).
@@ -120,34 +120,24 @@ inline bool wanted(const std::vector<std::size_t>& subset, std::size_t v) {
   return subset.empty() || std::find(subset.begin(), subset.end(), v) != subset.end();
 }
 
-/// The rule variants the grid's robust column takes (--variant).
-constexpr const char* kGridVariants = "-witness, +through, -both, nbsupport, +floor";
-
 /// f(the robust column's model): the defaults (empty name) or the variant `name`
-/// (bench/robust_variants.hpp); false, without calling f, for a name not in kGridVariants.
+/// (bench/robust_variants.hpp); false, without calling f, for a name it does not hold.
 template <class F>
 bool with_robust_variant(const std::string& name, F&& f) {
-  if (name.empty())
-    f(RobustModel{});
-  else if (name == "-witness")
-    f(BasicRobustModel<SeeThroughPerKeyframe>{});
-  else if (name == "+through")
-    f(BasicRobustModel<RaysThroughBelieved>{});
-  else if (name == "-both")
-    f(BasicRobustModel<PerKeyframeAndThrough>{});
-  else if (name == "nbsupport")
-    f(BasicRobustModel<NbSupport>{});
-  else if (name == "+floor")
-    f(BasicRobustModel<FloorSeenThrough>{});
-  else
-    return false;
-  return true;
+  bool found = false;
+  for_each_robust_variant([&](const std::string& n, const auto& model) {
+    if (!found && n == (name.empty() ? "robust" : name)) {
+      found = true;
+      f(model);
+    }
+  });
+  return found;
 }
 
 inline int run_grid(const GridOptions& opt) {
   if (!with_robust_variant(opt.variant, [](const auto&) {})) {
     std::fprintf(stderr, "bench_robust_model: unknown --variant %s (%s)\n", opt.variant.c_str(),
-                 kGridVariants);
+                 robust_variant_names().c_str());
     return 2;
   }
   std::vector<sim::GridCell> cells;

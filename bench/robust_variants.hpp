@@ -88,14 +88,46 @@ struct RobustVariant {
       real;
 };
 
+/// f(name, model) for the default model ("robust") and then each variant, in the ablation's order.
+template <class F>
+void for_each_robust_variant(F&& f) {
+  f("robust", RobustModel{});
+  for (const double m : {1.0, 3.0}) {
+    RobustModelParams p;
+    p.margin_scale = m;
+    f(m == 1.0 ? "margin1" : "margin3", RobustModel(p));
+  }
+  f("+gaps", BasicRobustModel<WithGaps>{});
+  f("-check", BasicRobustModel<WithoutSupportCheck>{});
+  f("-support", BasicRobustModel<WithoutSupport>{});
+  f("-seethru", BasicRobustModel<WithoutSeeThrough>{});
+  f("rays1", BasicRobustModel<RaysFromOne>{});
+  f("rays2", BasicRobustModel<RaysFromTwo>{});
+  f("-witness", BasicRobustModel<SeeThroughPerKeyframe>{});
+  f("+through", BasicRobustModel<RaysThroughBelieved>{});
+  f("-both", BasicRobustModel<PerKeyframeAndThrough>{});
+  f("nbsupport", BasicRobustModel<NbSupport>{});
+  f("+floor", BasicRobustModel<FloorSeenThrough>{});
+}
+
+/// The variants' names (not the default's), comma-separated, for messages.
+inline std::string robust_variant_names() {
+  std::string names;
+  for_each_robust_variant([&](const std::string& name, const auto&) {
+    if (name != "robust") names += (names.empty() ? "" : ", ") + name;
+  });
+  return names;
+}
+
 /// The default model and, with ablate, its variants; map_sim and map_real are the bench's own
 /// runners, templated on the model.
 template <class MapSim, class MapReal>
 std::vector<RobustVariant> robust_variants(bool ablate, MapSim map_sim, MapReal map_real) {
   std::vector<RobustVariant> v;
-  auto add = [&](std::string name, auto model) {
+  auto add = [&](const std::string& name, const auto& model) {
+    if (!ablate && name != "robust") return;
     v.push_back(
-        RobustVariant{std::move(name),
+        RobustVariant{name,
                       [=](const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& ref,
                           double& ms) { return map_sim(kfs, ref, model, ms); },
                       [=](const io::Sequence& seq, double res, double crop,
@@ -103,24 +135,7 @@ std::vector<RobustVariant> robust_variants(bool ablate, MapSim map_sim, MapReal 
                         return map_real(seq, res, crop, model, use);
                       }});
   };
-  add("robust", RobustModel{});
-  if (!ablate) return v;
-  for (const double m : {1.0, 3.0}) {
-    RobustModelParams p;
-    p.margin_scale = m;
-    add(m == 1.0 ? "margin1" : "margin3", RobustModel(p));
-  }
-  add("+gaps", BasicRobustModel<WithGaps>{});
-  add("-check", BasicRobustModel<WithoutSupportCheck>{});
-  add("-support", BasicRobustModel<WithoutSupport>{});
-  add("-seethru", BasicRobustModel<WithoutSeeThrough>{});
-  add("rays1", BasicRobustModel<RaysFromOne>{});
-  add("rays2", BasicRobustModel<RaysFromTwo>{});
-  add("-witness", BasicRobustModel<SeeThroughPerKeyframe>{});
-  add("+through", BasicRobustModel<RaysThroughBelieved>{});
-  add("-both", BasicRobustModel<PerKeyframeAndThrough>{});
-  add("nbsupport", BasicRobustModel<NbSupport>{});
-  add("+floor", BasicRobustModel<FloorSeenThrough>{});
+  for_each_robust_variant(add);
   return v;
 }
 

@@ -47,7 +47,8 @@ void bind_knn2022(py::module_& m) {
           p.inner_range = inner_range;
           return FirstPass{Knn2022FirstPass(p), {}};  // validates (ValueError)
         }),
-        py::arg("k") = 24, py::arg("inner_range") = 4.0,
+        py::arg("k") = static_cast<long long>(Knn2022Params{}.k),
+        py::arg("inner_range") = Knn2022Params{}.inner_range,
         "A first pass with the 2022 model's k and inner range.");
   c.def(
       "add",

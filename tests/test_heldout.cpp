@@ -229,3 +229,67 @@ TEST_CASE("heldout: interleaved folds; every fold's map built from the others an
           kfs, bad, [](const std::vector<std::size_t>&) { return OccupancyMap<OcKey>(0.1); }),
       std::invalid_argument);
 }
+
+TEST_CASE("heldout: the floor equals the fewest seen-through voxels of every map, enumerated") {
+  // Small scenes with coarse voxels, so that held-out rays cross voxels holding held-out points.
+  // Every pair of fold maps over the voxels holding scored points is scored; the floor must be
+  // the least seen-through count among the pairs that recall at least r points, for every r.
+  const double res = 1.0;  // eight voxels hold the pool: several points share one
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int scenes = 0, with_crossed = 0;
+  while (scenes < 12) {
+    std::vector<Point3d> pool(8);
+    for (Point3d& p : pool) p = {u(rng), u(rng), u(rng)};
+    std::vector<eval::IdKeyframe> kfs(4);
+    for (eval::IdKeyframe& kf : kfs) {
+      kf.origin = {u(rng) * 3, u(rng) * 3, u(rng) * 3};
+      for (std::size_t id = 0; id < pool.size(); ++id)
+        if (rng() % 3 != 0) {
+          kf.points.push_back(pool[id]);
+          kf.ids.push_back(id);
+        }
+    }
+    eval::HeldoutOptions opt;
+    opt.folds = 2;
+    const Grid<OcKey> grid(res);
+    std::vector<OcKey> voxels;  // every voxel holding a scored point of either fold
+    for (std::size_t f = 0; f < 2; ++f)
+      for (const auto& e : eval::heldout_points(kfs, eval::fold_indices(4, 2, f, true))) {
+        OcKey k;
+        if (e.second.views < opt.min_views || !grid.point_to_key(e.second.position, k)) continue;
+        if (std::find(voxels.begin(), voxels.end(), k) == voxels.end()) voxels.push_back(k);
+      }
+    if (voxels.empty() || voxels.size() > 6) continue;
+    ++scenes;
+    const eval::HeldoutFloor floor = eval::evaluate_heldout_floor(grid, kfs, opt);
+    with_crossed += !floor.crossed.empty();
+    const std::size_t n = voxels.size();
+    std::map<std::size_t, std::size_t> fewest;  // recalled -> least seen-through
+    std::size_t points = 0;
+    for (std::size_t a = 0; a < (1u << n); ++a)
+      for (std::size_t b = 0; b < (1u << n); ++b) {
+        eval::HeldoutScore sum;
+        for (std::size_t f = 0; f < 2; ++f) {
+          OccupancyMap<OcKey> map(res);
+          for (std::size_t v = 0; v < n; ++v)
+            if (((f == 0 ? a : b) >> v) & 1u) map.set(voxels[v], 1.0f);
+          sum += eval::score_heldout(map, kfs, eval::fold_indices(4, 2, f, true), opt);
+        }
+        points = sum.points;
+        auto it = fewest.find(sum.recalled);
+        if (it == fewest.end() || sum.seen_through < it->second)
+          fewest[sum.recalled] = sum.seen_through;
+      }
+    CAPTURE(scenes);
+    CHECK(floor.points == points);
+    for (std::size_t r = 0; r <= points + 1; ++r) {
+      std::optional<std::size_t> want;
+      for (const auto& [recalled, st] : fewest)
+        if (recalled >= r && (!want || st < *want)) want = st;
+      CAPTURE(r);
+      CHECK(floor.fewest_seen_through(r) == want);
+    }
+  }
+  CHECK(with_crossed >= 4);  // the scenes do test crossed voxels
+}

@@ -18,14 +18,22 @@
 // multi-view points are walked: the ray of a wrong match seen once ends off the surface and
 // would pass through correct structure.
 //
+// The floor (HeldoutFloor) is what no map can beat on the same keyframes: the fewest seen-through
+// voxels of any maps with a given recall. A held-out point may lie in a voxel that another held-out
+// ray crosses (a depth edge, a grazing ray, depth noise); a map that recalls it contradicts that
+// ray. The floor tells how much of a seen-through count the resolution and the data impose.
+//
 // The maps come from a caller's function build(train) -> OccupancyMap (train: the indices of the
 // keyframes to map, in sequence order), so the evaluation knows nothing of models or Mapper.
 //
 // Thread safety: functions of their arguments only.
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -109,14 +117,13 @@ inline HeldoutPoints heldout_points(const std::vector<IdKeyframe>& keyframes,
 
 /// Walks the rays the score walks (held-out keyframe i's ray to its point j, for points `points`
 /// says min_views held-out keyframes observe, stopped end_margin short) and calls f(i, j, key) for
-/// every occupied voxel of `map` each passes before its end voxel; returns the rays walked.
+/// every voxel of `grid` each passes before its end voxel; returns the rays walked.
 template <class Key, class F>
-std::size_t for_each_seen_through(const OccupancyMap<Key>& map,
-                                  const std::vector<IdKeyframe>& keyframes,
-                                  const std::vector<std::size_t>& heldout,
-                                  const HeldoutPoints& points, const HeldoutOptions& opt, F&& f) {
+std::size_t for_each_heldout_ray_key(const Grid<Key>& g, const std::vector<IdKeyframe>& keyframes,
+                                     const std::vector<std::size_t>& heldout,
+                                     const HeldoutPoints& points, const HeldoutOptions& opt,
+                                     F&& f) {
   std::size_t rays = 0;
-  const Grid<Key>& g = map.grid();
   for (const std::size_t i : heldout) {
     const IdKeyframe& kf = keyframes[i];
     const Point3f o = knnocc::detail::to_point3f(kf.origin);
@@ -131,12 +138,22 @@ std::size_t for_each_seen_through(const OccupancyMap<Key>& map,
         const double s = (len - opt.end_margin) / len;
         end = {kf.origin.x + s * dx, kf.origin.y + s * dy, kf.origin.z + s * dz};
       }
-      for_each_ray_key(g, o, knnocc::detail::to_point3f(end), [&](const Key& k) {
-        if (map.is_occupied(k).value_or(false)) f(i, j, k);
-      });
+      for_each_ray_key(g, o, knnocc::detail::to_point3f(end), [&](const Key& k) { f(i, j, k); });
     }
   }
   return rays;
+}
+
+/// for_each_heldout_ray_key restricted to the occupied voxels of `map`.
+template <class Key, class F>
+std::size_t for_each_seen_through(const OccupancyMap<Key>& map,
+                                  const std::vector<IdKeyframe>& keyframes,
+                                  const std::vector<std::size_t>& heldout,
+                                  const HeldoutPoints& points, const HeldoutOptions& opt, F&& f) {
+  return for_each_heldout_ray_key(map.grid(), keyframes, heldout, points, opt,
+                                  [&](std::size_t i, std::size_t j, const Key& k) {
+                                    if (map.is_occupied(k).value_or(false)) f(i, j, k);
+                                  });
 }
 
 /// Scores `map` against the held-out keyframes `heldout` (indices into `keyframes`);
@@ -177,6 +194,81 @@ HeldoutScore evaluate_heldout(const std::vector<IdKeyframe>& keyframes, const He
     const auto map = build(fold_indices(keyframes.size(), opt.folds, f, false));
     total += score_heldout(map, keyframes, fold_indices(keyframes.size(), opt.folds, f, true), opt);
   }
+  return total;
+}
+
+/// What no map can beat on the same held-out keyframes: a scored point is recalled only through
+/// its voxel, and a voxel that one of its fold's held-out rays passes before the end voxel
+/// (crossed) is a seen-through voxel whenever that fold's map occupies it. Maps that occupy every
+/// uncrossed voxel holding scored points, and of the crossed ones those holding the most points
+/// first, recall the most for the fewest seen-through voxels; fewest_seen_through is that least
+/// count, exact for the folds' maps together (voxels holding no scored point add no recall).
+struct HeldoutFloor {
+  std::size_t points = 0;     ///< scored points, as HeldoutScore::points
+  std::size_t uncrossed = 0;  ///< of them, in voxels that no held-out ray of their fold crosses
+  std::vector<std::size_t>
+      crossed;  ///< per crossed voxel (of a fold) holding scored points: how many
+
+  /// The fewest seen-through voxels of maps that recall `recalled` points; nullopt if no map
+  /// can (points outside the grid are never recalled).
+  std::optional<std::size_t> fewest_seen_through(std::size_t recalled) const {
+    std::vector<std::size_t> most = crossed;
+    std::sort(most.begin(), most.end(), std::greater<>());
+    std::size_t have = uncrossed, voxels = 0;
+    for (const std::size_t n : most) {
+      if (have >= recalled) break;
+      have += n;
+      ++voxels;
+    }
+    if (have < recalled) return std::nullopt;
+    return voxels;
+  }
+  HeldoutFloor& operator+=(const HeldoutFloor& o) {
+    points += o.points;
+    uncrossed += o.uncrossed;
+    crossed.insert(crossed.end(), o.crossed.begin(), o.crossed.end());
+    return *this;
+  }
+};
+
+/// The floor of one fold: keyframes[heldout] against any map on `grid`.
+template <class Key>
+HeldoutFloor heldout_floor(const Grid<Key>& grid, const std::vector<IdKeyframe>& keyframes,
+                           const std::vector<std::size_t>& heldout,
+                           const HeldoutOptions& opt = {}) {
+  const HeldoutPoints seen = heldout_points(keyframes, heldout);
+  HeldoutFloor floor;
+  std::unordered_map<Key, std::size_t, KeyHash> in_voxel;  // scored points per voxel
+  for (const auto& e : seen) {
+    if (e.second.views < opt.min_views) continue;
+    ++floor.points;
+    Key k;
+    if (grid.point_to_key(e.second.position, k)) ++in_voxel[k];
+  }
+  std::unordered_set<Key, KeyHash> crossed;
+  for_each_heldout_ray_key(grid, keyframes, heldout, seen, opt,
+                           [&](std::size_t, std::size_t, const Key& k) {
+                             if (in_voxel.count(k)) crossed.insert(k);
+                           });
+  for (const auto& [k, n] : in_voxel) {
+    if (crossed.count(k))
+      floor.crossed.push_back(n);
+    else
+      floor.uncrossed += n;
+  }
+  return floor;
+}
+
+/// The floor of all folds (split as evaluate_heldout splits them).
+template <class Key>
+HeldoutFloor evaluate_heldout_floor(const Grid<Key>& grid, const std::vector<IdKeyframe>& keyframes,
+                                    const HeldoutOptions& opt) {
+  if (opt.folds < 2 || opt.folds > keyframes.size())
+    knnocc::detail::invalid_argument("held-out evaluation: folds must be in [2, keyframes]");
+  HeldoutFloor total;
+  for (std::size_t f = 0; f < opt.folds; ++f)
+    total +=
+        heldout_floor(grid, keyframes, fold_indices(keyframes.size(), opt.folds, f, true), opt);
   return total;
 }
 

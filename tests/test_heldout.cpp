@@ -72,7 +72,7 @@ TEST_CASE("heldout: recall and seen-through voxels equal a brute force with dens
   std::mt19937_64 rng(2024);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::uniform_real_distribution<float> lo(-2.0f, 2.0f);
-  std::size_t total_through = 0, total_recalled = 0, clipped = 0;
+  std::size_t total_through = 0, total_recalled = 0, total_confirmed = 0, clipped = 0;
   for (int trial = 0; trial < 12; ++trial) {
     const double res = trial % 2 ? 0.1 : 0.07;
     OccupancyMap<OcKey> map(res);
@@ -157,6 +157,18 @@ TEST_CASE("heldout: recall and seen-through voxels equal a brute force with dens
       CHECK_MESSAGE(near, "a walked voxel that no ray comes near");
     }
     CHECK(s.occupied == map.count_voxels().occupied);
+    // Confirmed: the walked voxels that hold a scored point.
+    std::set<std::uint64_t> scored_voxels;
+    for (const auto& e : observers) {
+      OcKey k;
+      const Point3d& p = where.at(e.first);
+      if (e.second.size() >= opt.min_views && key_of(res, p.x, p.y, p.z, k))
+        scored_voxels.insert(k.pack());
+    }
+    std::size_t confirmed = 0;
+    for (const std::uint64_t k : walked_set) confirmed += scored_voxels.count(k);
+    CHECK(s.confirmed == confirmed);
+    total_confirmed += confirmed;
     // The walk behind the score, crossing by crossing: held-out keyframes' rays to scored points,
     // occupied voxels only, the same voxels and the same ray count.
     std::set<std::uint64_t> crossed;
@@ -180,6 +192,7 @@ TEST_CASE("heldout: recall and seen-through voxels equal a brute force with dens
   CHECK(clipped * 20 < total_through);
   CHECK(total_through > 100);
   CHECK(total_recalled > 20);
+  CHECK(total_confirmed > 0);
 }
 
 TEST_CASE("heldout: interleaved folds; every fold's map built from the others and summed") {
@@ -219,6 +232,7 @@ TEST_CASE("heldout: interleaved folds; every fold's map built from the others an
     CHECK(total.points == sum.points);
     CHECK(total.recalled == sum.recalled);
     CHECK(total.seen_through == sum.seen_through);
+    CHECK(total.confirmed == sum.confirmed);
     CHECK(total.points > 0);
     CHECK(total.recall() > 0.9);  // the pool is small: training keyframes saw nearly every point
   }

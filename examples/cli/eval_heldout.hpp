@@ -137,12 +137,16 @@ inline int run_eval_heldout(const Args& args) {
     if (std::string(name) == "octomap") octomap = s;
     std::printf(
         "heldout %-8s folds %zu points %zu recall %.4f rays %zu seen_through %zu occupied %zu "
-        "seen_through_share %.4f floor %zu",
+        "seen_through_share %.4f floor %zu confirmed %zu",
         name, opt.folds, s.points, s.recall(), s.rays, s.seen_through, s.occupied,
-        s.seen_through_share(), floor.fewest_seen_through(s.recalled).value_or(0));
+        s.seen_through_share(), floor.fewest_seen_through(s.recalled).value_or(0), s.confirmed);
     if (octomap.occupied > 0 && octomap.seen_through > 0)
       std::printf(" seen_through/octomap %.1f %%",
                   100.0 * double(s.seen_through) / double(octomap.seen_through));
+    if (octomap.seen_through > octomap.confirmed)
+      std::printf(" unconfirmed/octomap %.1f %%",
+                  100.0 * double(s.seen_through - s.confirmed) /
+                      double(octomap.seen_through - octomap.confirmed));
     std::printf("\n");
     std::fflush(stdout);
   });

@@ -13,6 +13,8 @@
 //   seen_through  distinct occupied voxels of the map that such a ray passes through before its
 //                 end voxel (the voxels the held-out keyframe saw empty: a contradiction of the
 //                 map by data it was not built from); the origin voxel counts, the end voxel not
+//   confirmed     of those, the ones holding a scored point: voxels the held-out keyframes both
+//                 saw empty and saw occupied (as at a depth edge), against the map only in part
 //   occupied      occupied voxels of the map (seen_through is a share of it)
 // Scores are summed over the folds (each fold's map counts its own voxels). Only rays to
 // multi-view points are walked: the ray of a wrong match seen once ends off the surface and
@@ -64,7 +66,7 @@ struct HeldoutOptions {
 };
 
 struct HeldoutScore {
-  std::size_t points = 0, recalled = 0, rays = 0, seen_through = 0, occupied = 0;
+  std::size_t points = 0, recalled = 0, rays = 0, seen_through = 0, confirmed = 0, occupied = 0;
 
   double recall() const { return points ? double(recalled) / double(points) : 0.0; }
   /// seen_through as a share of the occupied voxels.
@@ -76,6 +78,7 @@ struct HeldoutScore {
     recalled += o.recalled;
     rays += o.rays;
     seen_through += o.seen_through;
+    confirmed += o.confirmed;
     occupied += o.occupied;
     return *this;
   }
@@ -165,17 +168,21 @@ HeldoutScore score_heldout(const OccupancyMap<Key>& map, const std::vector<IdKey
   const HeldoutPoints seen = heldout_points(keyframes, heldout);
   HeldoutScore s;
   const Grid<Key>& g = map.grid();
+  std::unordered_set<Key, KeyHash> scored;  // voxels holding scored points
   for (const auto& e : seen) {
     if (e.second.views < opt.min_views) continue;
     ++s.points;
     Key k;
-    if (g.point_to_key(e.second.position, k)) s.recalled += map.is_occupied(k).value_or(false);
+    if (!g.point_to_key(e.second.position, k)) continue;
+    s.recalled += map.is_occupied(k).value_or(false);
+    scored.insert(k);
   }
   std::unordered_set<Key, KeyHash> through;
   s.rays =
       for_each_seen_through(map, keyframes, heldout, seen, opt,
                             [&](std::size_t, std::size_t, const Key& k) { through.insert(k); });
   s.seen_through = through.size();
+  for (const Key& k : through) s.confirmed += scored.count(k);
   if (seen_through) seen_through->assign(through.begin(), through.end());
   s.occupied = map.count_voxels().occupied;
   return s;

@@ -139,7 +139,7 @@ inline int run_eval_heldout(const Args& args) {
         "heldout %-8s folds %zu points %zu recall %.4f rays %zu seen_through %zu occupied %zu "
         "seen_through_share %.4f floor %zu confirmed %zu",
         name, opt.folds, s.points, s.recall(), s.rays, s.seen_through, s.occupied,
-        s.seen_through_share(), floor.fewest_seen_through(s.recalled).value_or(0), s.confirmed);
+        s.seen_through_share(), floor.fewest_seen_through(s.recalled).value(), s.confirmed);
     if (octomap.occupied > 0 && octomap.seen_through > 0)
       std::printf(" seen_through/octomap %.1f %%",
                   100.0 * double(s.seen_through) / double(octomap.seen_through));
@@ -154,7 +154,7 @@ inline int run_eval_heldout(const Args& args) {
     // The recall goal beside OctoMap's (docs/evaluation.md): its recall less two points.
     const double recall = std::max(0.0, octomap.recall() - 0.02);
     const auto need = static_cast<std::size_t>(std::ceil(recall * double(octomap.points) - 1e-9));
-    const std::size_t least = floor.fewest_seen_through(need).value_or(0);
+    const std::size_t least = floor.fewest_seen_through(need).value();  // OctoMap's maps reach it
     std::printf(
         "heldout floor    recall %.4f (octomap's - 0.02) seen_through %zu (%.1f %% of octomap's)\n",
         recall, least, 100.0 * double(least) / double(octomap.seen_through));

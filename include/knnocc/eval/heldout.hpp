@@ -118,6 +118,24 @@ inline HeldoutPoints heldout_points(const std::vector<IdKeyframe>& keyframes,
   return seen;
 }
 
+/// The voxels of the points `points` says min_views held-out keyframes observe, with how many
+/// each holds; `scored` receives the number of such points, in the grid or not.
+template <class Key>
+std::unordered_map<Key, std::size_t, KeyHash> scored_voxels(const Grid<Key>& g,
+                                                            const HeldoutPoints& points,
+                                                            const HeldoutOptions& opt,
+                                                            std::size_t& scored) {
+  std::unordered_map<Key, std::size_t, KeyHash> voxels;
+  scored = 0;
+  for (const auto& e : points) {
+    if (e.second.views < opt.min_views) continue;
+    ++scored;
+    Key k;
+    if (g.point_to_key(e.second.position, k)) ++voxels[k];
+  }
+  return voxels;
+}
+
 /// Walks the rays the score walks (held-out keyframe i's ray to its point j, for points `points`
 /// says min_views held-out keyframes observe, stopped end_margin short) and calls f(i, j, key) for
 /// every voxel of `grid` each passes before its end voxel; returns the rays walked.
@@ -167,16 +185,9 @@ HeldoutScore score_heldout(const OccupancyMap<Key>& map, const std::vector<IdKey
                            std::vector<Key>* seen_through = nullptr) {
   const HeldoutPoints seen = heldout_points(keyframes, heldout);
   HeldoutScore s;
-  const Grid<Key>& g = map.grid();
-  std::unordered_set<Key, KeyHash> scored;  // voxels holding scored points
-  for (const auto& e : seen) {
-    if (e.second.views < opt.min_views) continue;
-    ++s.points;
-    Key k;
-    if (!g.point_to_key(e.second.position, k)) continue;
-    s.recalled += map.is_occupied(k).value_or(false);
-    scored.insert(k);
-  }
+  const auto scored = scored_voxels(map.grid(), seen, opt, s.points);
+  for (const auto& [k, n] : scored)
+    if (map.is_occupied(k).value_or(false)) s.recalled += n;
   std::unordered_set<Key, KeyHash> through;
   s.rays =
       for_each_seen_through(map, keyframes, heldout, seen, opt,
@@ -188,14 +199,20 @@ HeldoutScore score_heldout(const OccupancyMap<Key>& map, const std::vector<IdKey
   return s;
 }
 
+namespace detail {
+inline void check_folds(const HeldoutOptions& opt, std::size_t keyframes) {
+  if (opt.folds < 2 || opt.folds > keyframes)
+    knnocc::detail::invalid_argument("held-out evaluation: folds must be in [2, keyframes]");
+}
+}  // namespace detail
+
 /// All folds: build(train) (train: the other folds' keyframe indices, in order) returns the map
 /// of those keyframes, scored against the fold. folds < 2 or more folds than keyframes:
 /// std::invalid_argument.
 template <class Build>
 HeldoutScore evaluate_heldout(const std::vector<IdKeyframe>& keyframes, const HeldoutOptions& opt,
                               Build&& build) {
-  if (opt.folds < 2 || opt.folds > keyframes.size())
-    knnocc::detail::invalid_argument("held-out evaluation: folds must be in [2, keyframes]");
+  detail::check_folds(opt, keyframes.size());
   HeldoutScore total;
   for (std::size_t f = 0; f < opt.folds; ++f) {
     const auto map = build(fold_indices(keyframes.size(), opt.folds, f, false));
@@ -213,8 +230,7 @@ HeldoutScore evaluate_heldout(const std::vector<IdKeyframe>& keyframes, const He
 struct HeldoutFloor {
   std::size_t points = 0;     ///< scored points, as HeldoutScore::points
   std::size_t uncrossed = 0;  ///< of them, in voxels that no held-out ray of their fold crosses
-  std::vector<std::size_t>
-      crossed;  ///< per crossed voxel (of a fold) holding scored points: how many
+  std::vector<std::size_t> crossed;  ///< scored points in each crossed voxel (of each fold)
 
   /// The fewest seen-through voxels of maps that recall `recalled` points; nullopt if no map
   /// can (points outside the grid are never recalled).
@@ -245,13 +261,7 @@ HeldoutFloor heldout_floor(const Grid<Key>& grid, const std::vector<IdKeyframe>&
                            const HeldoutOptions& opt = {}) {
   const HeldoutPoints seen = heldout_points(keyframes, heldout);
   HeldoutFloor floor;
-  std::unordered_map<Key, std::size_t, KeyHash> in_voxel;  // scored points per voxel
-  for (const auto& e : seen) {
-    if (e.second.views < opt.min_views) continue;
-    ++floor.points;
-    Key k;
-    if (grid.point_to_key(e.second.position, k)) ++in_voxel[k];
-  }
+  const auto in_voxel = scored_voxels(grid, seen, opt, floor.points);
   std::unordered_set<Key, KeyHash> crossed;
   for_each_heldout_ray_key(grid, keyframes, heldout, seen, opt,
                            [&](std::size_t, std::size_t, const Key& k) {
@@ -270,8 +280,7 @@ HeldoutFloor heldout_floor(const Grid<Key>& grid, const std::vector<IdKeyframe>&
 template <class Key>
 HeldoutFloor evaluate_heldout_floor(const Grid<Key>& grid, const std::vector<IdKeyframe>& keyframes,
                                     const HeldoutOptions& opt) {
-  if (opt.folds < 2 || opt.folds > keyframes.size())
-    knnocc::detail::invalid_argument("held-out evaluation: folds must be in [2, keyframes]");
+  detail::check_folds(opt, keyframes.size());
   HeldoutFloor total;
   for (std::size_t f = 0; f < opt.folds; ++f)
     total +=

@@ -51,15 +51,32 @@ eval::Metrics run(const Scene& s, const Model& model) {
   return eval::evaluate(mapper.map(), s.reference);
 }
 
+const char* const kUsage =
+    "usage: build/bin/bench_knn_sweep [--seeds N] [--top N] [--model knn|knn2022]\n"
+    "  the k-NN model's sweep (the best --top combinations, default 25), or the 2022 model's\n";
+
 }  // namespace
 
 int main(int argc, char** argv) {
   int seeds = 5, top = 25;
   bool knn2022 = false;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--seeds")) seeds = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--top")) top = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--model")) knn2022 = !std::strcmp(argv[i + 1], "knn2022");
+  for (int i = 1; i < argc; ++i) {
+    const bool more = i + 1 < argc;
+    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+      std::printf("%s", kUsage);
+      return 0;
+    }
+    if (!std::strcmp(argv[i], "--seeds") && more) {
+      seeds = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--top") && more) {
+      top = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--model") && more &&
+               (!std::strcmp(argv[i + 1], "knn") || !std::strcmp(argv[i + 1], "knn2022"))) {
+      knn2022 = !std::strcmp(argv[++i], "knn2022");
+    } else {
+      std::fprintf(stderr, "bench_knn_sweep: unknown or incomplete option %s\n%s", argv[i], kUsage);
+      return 2;
+    }
   }
   if (seeds < 1) seeds = 1;
   if (knn2022) return bench::run_knn2022_sweep(static_cast<std::size_t>(seeds));

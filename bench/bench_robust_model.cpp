@@ -259,22 +259,6 @@ void real_dense(const std::string& dir) {
   row("robust", ms);
 }
 
-}  // namespace
-
-// "1,2,4" as numbers.
-template <class T>
-std::vector<T> number_list(const char* text) {
-  std::vector<T> out;
-  for (const char* p = text; *p;) {
-    char* end = nullptr;
-    const double v = std::strtod(p, &end);
-    if (end == p) break;
-    out.push_back(static_cast<T>(v));
-    p = *end == ',' ? end + 1 : end;
-  }
-  return out;
-}
-
 const char* const kUsage =
     "usage: build/bin/bench_robust_model [--seeds N] [--first-seed S] [--ablate] [--match TEXT]\n"
     "         [--data DIR] [--repeat N] [--cluster N] [--repeat-prob P] [--speed-runs N]\n"
@@ -293,6 +277,22 @@ const char* const kUsage =
 int usage_error(const char* arg) {
   std::fprintf(stderr, "bench_robust_model: unknown or incomplete option %s\n%s", arg, kUsage);
   return 2;
+}
+
+}  // namespace
+
+// "1,2,4" as numbers.
+template <class T>
+std::vector<T> number_list(const char* text) {
+  std::vector<T> out;
+  for (const char* p = text; *p;) {
+    char* end = nullptr;
+    const double v = std::strtod(p, &end);
+    if (end == p) break;
+    out.push_back(static_cast<T>(v));
+    p = *end == ',' ? end + 1 : end;
+  }
+  return out;
 }
 
 int main(int argc, char** argv) {

@@ -250,6 +250,13 @@ void heldout_left(const std::string& dir, double res) {
       rays.aside.with_range().c_str());
 }
 
+const char* const kUsage =
+    "usage: build/bin/diag_robust_model [--seeds N] [--first-seed S] [--data DIR] [--repeat N]\n"
+    "         [--cluster N] [--repeat-prob P]\n"
+    "  what the robust model believes and why: the regimes on seeds S..S+N-1 (default 1..5,\n"
+    "  their wrong patches changed as bench_robust_model changes them), then the real sets in\n"
+    "  DIR (default ../shared/data)\n";
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -271,6 +278,14 @@ int main(int argc, char** argv) {
       cluster = std::atoi(argv[++i]);
     else if (a == "--repeat-prob" && more)
       repeat_prob = std::atof(argv[++i]);
+    else if (a == "--help" || a == "-h") {
+      std::printf("%s", kUsage);
+      return 0;
+    } else {
+      std::fprintf(stderr, "diag_robust_model: unknown or incomplete option %s\n%s", a.c_str(),
+                   kUsage);
+      return 2;
+    }
   }
   std::printf("diag_robust_model: seeds %d..%d\n", first, first + seeds - 1);
   for (const sim::Regime& r : sim::named_regimes())

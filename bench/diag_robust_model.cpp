@@ -25,6 +25,7 @@
 #include <vector>
 
 #include <knnocc/eval/heldout.hpp>
+#include <knnocc/eval/id_keyframes.hpp>
 #include <knnocc/eval/metrics.hpp>
 #include <knnocc/io/sequence.hpp>
 #include <knnocc/mapper.hpp>
@@ -197,14 +198,7 @@ void rays_through(const std::vector<eval::IdKeyframe>& kfs, const std::vector<st
 // believes its point).
 void heldout_left(const std::string& dir, double res) {
   if (!std::filesystem::is_directory(dir)) return;
-  const io::Sequence seq = io::Sequence::open(dir);
-  std::vector<eval::IdKeyframe> kfs(seq.size());
-  for (std::size_t i = 0; i < seq.size(); ++i) {
-    io::keyframe_to_world(seq.pose(i), seq.load_cloud(i), 4.0, kfs[i].points, kfs[i].ids,
-                          &kfs[i].evidence);
-    const Eigen::Vector3d& t = seq.pose(i).t;
-    kfs[i].origin = {t.x(), t.y(), t.z()};
-  }
+  const std::vector<eval::IdKeyframe> kfs = eval::id_keyframes(io::Sequence::open(dir), 4.0);
   eval::HeldoutOptions opt;
   opt.end_margin = 0.3;
   std::size_t left = 0, also_octomap = 0;

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include <knnocc/eval/heldout.hpp>
+#include <knnocc/eval/id_keyframes.hpp>
 #include <knnocc/io/error.hpp>
 #include <knnocc/io/sequence.hpp>
 #include <knnocc/mapper.hpp>
@@ -26,26 +27,18 @@
 
 namespace knnocc::cli {
 
-/// The keyframes of a sequence whose clouds carry map-point ids (and the SLAM counters, when
-/// they do), in the world frame, points farther than crop (> 0) from their sensor dropped.
+/// The keyframes of a sequence whose clouds carry map-point ids (eval::id_keyframes), each
+/// cloud's ids checked to be distinct before any model runs (the models refuse repeated ids too).
 inline std::vector<eval::IdKeyframe> read_id_keyframes(const std::string& path, double crop) {
   const io::Sequence seq = io::Sequence::open(path);
-  std::vector<eval::IdKeyframe> out(seq.size());
   std::vector<std::uint64_t> scratch;
-  for (std::size_t i = 0; i < seq.size(); ++i) {
-    const io::Cloud cloud = seq.load_cloud(i);
-    if (cloud.ids.empty())
-      throw io::Error(seq.cloud_path(i), "no map-point ids (an `id` vertex property)");
-    try {  // before any model runs: the models refuse repeated ids too
+  return eval::id_keyframes(seq, crop, [&](std::size_t i, const io::Cloud& cloud) {
+    try {
       knnocc::detail::check_distinct_ids("keyframe", cloud.ids, scratch);
     } catch (const std::invalid_argument& e) {
       throw io::Error(seq.cloud_path(i), e.what());
     }
-    io::keyframe_to_world(seq.pose(i), cloud, crop, out[i].points, out[i].ids, &out[i].evidence);
-    const Eigen::Vector3d& t = seq.pose(i).t;
-    out[i].origin = {t.x(), t.y(), t.z()};
-  }
-  return out;
+  });
 }
 
 /// The map of keyframes[train] built by Mapper<Model> (as `knnocc map` does: float points for

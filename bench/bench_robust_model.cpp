@@ -4,9 +4,11 @@
 // eval/metrics.hpp) and on the real sets with map-point ids
 // (../shared/data/orbslam2_stereo_keyframes at 0.1 m with the 4 m crop, icl_living_room_traj2n at
 // 0.05 m: the proxies of eval/multiview.hpp against the OctoMap model's map; for the ICL set also
-// precision and recall against its room model's vertices, eval/reference_points.hpp) and the TUM
-// depth clouds (tum_fr2_pioneer_slam2, 0.05 m: occupied voxels as % of the OctoMap model's). The
-// 2022 model gets whole clouds (it cuts at its own 4 m) and a first pass for mu and sigma.
+// precision and recall against its room model's vertices, eval/reference_points.hpp; and the
+// held-out evaluation of eval/heldout.hpp for the OctoMap, k-NN and robust models and each variant
+// of the robust model: `knnocc eval --heldout` has the 2022 model's) and the TUM depth clouds
+// (tum_fr2_pioneer_slam2, 0.05 m: occupied voxels as % of the OctoMap model's). The 2022 model
+// gets whole clouds (it cuts at its own 4 m) and a first pass for mu and sigma.
 // --ablate also maps each regime with the robust model's variants (bench/robust_variants.hpp:
 // other margins, a term of the mixture added or left out, rays from another detection).
 //
@@ -40,6 +42,7 @@
 #include <knnocc/sim/tree_scene.hpp>
 
 #include "bench_common.hpp"
+#include "eval_heldout.hpp"
 #include "quality_grid.hpp"
 #include "regime_changes.hpp"
 #include "robust_variants.hpp"
@@ -235,6 +238,40 @@ void real_ids(const std::string& dir, double res, double crop,
       best_robust / best_knn, best_robust, best_knn, runs, ratios.c_str());
 }
 
+// The held-out evaluation (eval/heldout.hpp, as `knnocc eval --heldout` with 5 folds) of the
+// OctoMap model, the k-NN model and the robust model's variants on a real set with ids: recall,
+// and the seen-through and unconfirmed voxels at margins 0 and 0.3 m (each fold's map scored at
+// both).
+void heldout_rows(const std::string& dir, double res, double crop,
+                  const std::vector<bench::RobustVariant>& vars) {
+  const std::vector<eval::IdKeyframe> kfs = eval::id_keyframes(io::Sequence::open(dir), crop);
+  std::printf(
+      "  held out (5 folds): recall; seen-through and unconfirmed voxels at margins 0 / 0.3 m\n");
+  auto row = [&](const std::string& name, const auto& build) {
+    eval::HeldoutOptions opt;
+    eval::HeldoutScore at[2];
+    for (std::size_t f = 0; f < opt.folds; ++f) {
+      const OccupancyMap<OcKey> map = build(eval::fold_indices(kfs.size(), opt.folds, f, false));
+      const auto held = eval::fold_indices(kfs.size(), opt.folds, f, true);
+      for (int m = 0; m < 2; ++m) {
+        opt.end_margin = m ? 0.3 : 0.0;
+        at[m] += eval::score_heldout(map, kfs, held, opt);
+      }
+    }
+    std::printf("  %-9s recall %.4f  seen-through %5zu / %4zu  unconfirmed %5zu / %4zu\n",
+                name.c_str(), at[0].recall(), at[0].seen_through, at[1].seen_through,
+                at[0].seen_through - at[0].confirmed, at[1].seen_through - at[1].confirmed);
+  };
+  row("octomap", [&](const std::vector<std::size_t>& train) {
+    return cli::map_keyframes(kfs, train, res, OctoMapModel{});
+  });
+  row("knn", [&](const std::vector<std::size_t>& train) {
+    return cli::map_keyframes(kfs, train, res, KnnModel{});
+  });
+  for (const bench::RobustVariant& v : vars)
+    row(v.name, [&](const std::vector<std::size_t>& train) { return v.train(kfs, train, res); });
+}
+
 // Dense depth clouds (TUM fr2/pioneer_slam2, 0.05 m, no ids): each model's occupied voxels as a
 // share of the OctoMap model's (goal: >= 95 % for a model that keeps dense surfaces).
 void real_dense(const std::string& dir) {
@@ -375,7 +412,9 @@ int main(int argc, char** argv) {
       [](const io::Sequence& seq, double res, double crop, const auto& model,
          const std::function<void(const OccupancyMap<OcKey>&)>& use) {
         return run_sequence(seq, res, crop, model, use);
-      });
+      },
+      [](const std::vector<eval::IdKeyframe>& kfs, const std::vector<std::size_t>& train,
+         double res, const auto& model) { return cli::map_keyframes(kfs, train, res, model); });
   if (!match.empty())  // the default and the variants whose name contains the text
     vars.erase(std::remove_if(vars.begin() + 1, vars.end(),
                               [&](const bench::RobustVariant& v) {
@@ -423,10 +462,12 @@ int main(int argc, char** argv) {
   const std::string stereo = data + "/orbslam2_stereo_keyframes",
                     icl = data + "/icl_living_room_traj2n", tum = data + "/tum_fr2_pioneer_slam2";
   for (const auto& [dir, res, crop] : {std::tuple{stereo, 0.1, 4.0}, std::tuple{icl, 0.05, -1.0}})
-    if (std::filesystem::is_directory(dir))
+    if (std::filesystem::is_directory(dir)) {
       real_ids(dir, res, crop, vars, runs);
-    else
+      heldout_rows(dir, res, crop, vars);
+    } else {
       std::printf("\n(no %s: skipped)\n", dir.c_str());
+    }
   if (std::filesystem::is_directory(tum))
     real_dense(tum);
   else

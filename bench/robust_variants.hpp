@@ -4,11 +4,13 @@
 
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include <knnocc/eval/heldout.hpp>
 #include <knnocc/eval/metrics.hpp>
 #include <knnocc/eval/reference.hpp>
 #include <knnocc/io/sequence.hpp>
@@ -76,8 +78,8 @@ struct WithoutSeeThrough : RobustRules {
 };
 
 /// A variant: its name and how it maps simulated keyframes (the map's Table 1 metrics and the
-/// median milliseconds per keyframe added to ms) and a real sequence at a resolution and crop (the
-/// map handed to use).
+/// median milliseconds per keyframe added to ms), a real sequence at a resolution and crop (the
+/// map handed to use), and some of a real sequence's keyframes (the held-out evaluation's train).
 struct RobustVariant {
   std::string name;
   std::function<eval::Metrics(const std::vector<sim::SimKeyframe>&, const eval::Reference&,
@@ -86,6 +88,9 @@ struct RobustVariant {
   std::function<double(const io::Sequence&, double res, double crop,
                        const std::function<void(const OccupancyMap<OcKey>&)>&)>
       real;
+  std::function<OccupancyMap<OcKey>(const std::vector<eval::IdKeyframe>&,
+                                    const std::vector<std::size_t>& train, double res)>
+      train;
 };
 
 /// f(name, model) for the default model ("robust") and then each variant, in the ablation's order.
@@ -119,21 +124,25 @@ inline std::string robust_variant_names() {
   return names;
 }
 
-/// The default model and, with ablate, its variants; map_sim and map_real are the bench's own
-/// runners, templated on the model.
-template <class MapSim, class MapReal>
-std::vector<RobustVariant> robust_variants(bool ablate, MapSim map_sim, MapReal map_real) {
+/// The default model and, with ablate, its variants; map_sim, map_real and map_train are the
+/// bench's own runners, templated on the model.
+template <class MapSim, class MapReal, class MapTrain>
+std::vector<RobustVariant> robust_variants(bool ablate, MapSim map_sim, MapReal map_real,
+                                           MapTrain map_train) {
   std::vector<RobustVariant> v;
   auto add = [&](const std::string& name, const auto& model) {
     if (!ablate && name != "robust") return;
-    v.push_back(
-        RobustVariant{name,
-                      [=](const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& ref,
-                          double& ms) { return map_sim(kfs, ref, model, ms); },
-                      [=](const io::Sequence& seq, double res, double crop,
-                          const std::function<void(const OccupancyMap<OcKey>&)>& use) {
-                        return map_real(seq, res, crop, model, use);
-                      }});
+    v.push_back(RobustVariant{
+        name,
+        [=](const std::vector<sim::SimKeyframe>& kfs, const eval::Reference& ref, double& ms) {
+          return map_sim(kfs, ref, model, ms);
+        },
+        [=](const io::Sequence& seq, double res, double crop,
+            const std::function<void(const OccupancyMap<OcKey>&)>& use) {
+          return map_real(seq, res, crop, model, use);
+        },
+        [=](const std::vector<eval::IdKeyframe>& kfs, const std::vector<std::size_t>& train,
+            double res) { return map_train(kfs, train, res, model); }});
   };
   for_each_robust_variant(add);
   return v;

@@ -5,10 +5,10 @@
 // (../shared/data/orbslam2_stereo_keyframes at 0.1 m with the 4 m crop, icl_living_room_traj2n at
 // 0.05 m: the proxies of eval/multiview.hpp against the OctoMap model's map; for the ICL set also
 // precision and recall against its room model's vertices, eval/reference_points.hpp; and the
-// held-out evaluation of eval/heldout.hpp for the OctoMap, k-NN and robust models and each variant
-// of the robust model: `knnocc eval --heldout` has the 2022 model's) and the TUM depth clouds
-// (tum_fr2_pioneer_slam2, 0.05 m: occupied voxels as % of the OctoMap model's). The 2022 model
-// gets whole clouds (it cuts at its own 4 m) and a first pass for mu and sigma.
+// held-out evaluation of eval/heldout.hpp for every model and each variant of the robust model)
+// and the TUM depth clouds (tum_fr2_pioneer_slam2, 0.05 m: occupied voxels as % of the OctoMap
+// model's). The 2022 model gets whole clouds (it cuts at its own 4 m) and a first pass for mu and
+// sigma.
 // --ablate also maps each regime with the robust model's variants (bench/robust_variants.hpp:
 // other margins, a term of the mixture added or left out, rays from another detection).
 //
@@ -239,12 +239,15 @@ void real_ids(const std::string& dir, double res, double crop,
 }
 
 // The held-out evaluation (eval/heldout.hpp, as `knnocc eval --heldout` with 5 folds) of the
-// OctoMap model, the k-NN model and the robust model's variants on a real set with ids: recall,
+// OctoMap, k-NN and 2022 models and the robust model's variants on a real set with ids: recall,
 // and the seen-through and unconfirmed voxels at margins 0 and 0.3 m (each fold's map scored at
 // both).
 void heldout_rows(const std::string& dir, double res, double crop,
                   const std::vector<bench::RobustVariant>& vars) {
-  const std::vector<eval::IdKeyframe> kfs = eval::id_keyframes(io::Sequence::open(dir), crop);
+  const io::Sequence seq = io::Sequence::open(dir);
+  const std::vector<eval::IdKeyframe> kfs = eval::id_keyframes(seq, crop);
+  // The 2022 model maps whole clouds (it cuts at its own inner range), as in the tool.
+  const std::vector<eval::IdKeyframe> whole = crop > 0 ? eval::id_keyframes(seq, -1.0) : kfs;
   std::printf(
       "  held out (5 folds): recall; seen-through and unconfirmed voxels at margins 0 / 0.3 m\n");
   auto row = [&](const std::string& name, const auto& build) {
@@ -267,6 +270,9 @@ void heldout_rows(const std::string& dir, double res, double crop,
   });
   row("knn", [&](const std::vector<std::size_t>& train) {
     return cli::map_keyframes(kfs, train, res, KnnModel{});
+  });
+  row("knn2022", [&](const std::vector<std::size_t>& train) {
+    return cli::map_keyframes_2022(whole, train, res, Knn2022Params{}, true);
   });
   for (const bench::RobustVariant& v : vars)
     row(v.name, [&](const std::vector<std::size_t>& train) { return v.train(kfs, train, res); });

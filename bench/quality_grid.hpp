@@ -238,7 +238,9 @@ inline int run_grid(const GridOptions& opt) {
     if (!used(m)) continue;
     std::size_t le10 = 0, le25 = 0, shell97 = 0, above_knn = 0, below_oracle = 0, grid_cells = 0;
     double worst = 0, worst_shell = 1e9, cliff = 0, mixed_pct = std::nan(""), f1_sum = 0;
-    std::string cliff_at, above_at;  // above_at: the cells above knn, with the node counts
+    // above_at: the first few cells above knn, with the node counts (the rest counted)
+    std::string cliff_at, above_at;
+    constexpr std::size_t kNamed = 4;
     for (std::size_t c = 0; c < cells.size(); ++c) {
       const double p = irr_pct(c, m), sh = shell_pct(c, m);
       if (cells[c].mixed) {
@@ -250,12 +252,10 @@ inline int run_grid(const GridOptions& opt) {
       le10 += p <= 10.0;
       le25 += p <= 25.0;
       shell97 += sh >= 97.0;
-      if (p > irr_pct(c, 2)) {
-        ++above_knn;
+      if (p > irr_pct(c, 2) && ++above_knn <= kNamed)
         above_at += (above_at.empty() ? "" : ", ") + cells[c].name() + " " +
                     std::to_string(score[c][m].table1.irrelevant) + " vs " +
                     std::to_string(score[c][2].table1.irrelevant) + " nodes";
-      }
       below_oracle += opt.tune && score[c][m].counts.f1() < score[c][1].counts.f1();
       worst = std::max(worst, std::isnan(p) ? 0.0 : p);
       worst_shell = std::min(worst_shell, std::isnan(sh) ? 1e9 : sh);
@@ -268,6 +268,7 @@ inline int run_grid(const GridOptions& opt) {
           }
         }
     }
+    if (above_knn > kNamed) above_at += ", " + std::to_string(above_knn - kNamed) + " more";
     std::printf(
         "  %-9s irrelevant <= 10 %%: %zu of %zu cells [>= 90 %%], <= 25 %%: %zu [all], worst "
         "%.1f %%; above knn in %zu [0]%s%s%s; shell >= 97 %%: %zu [all], lowest %.1f %%; mixed "

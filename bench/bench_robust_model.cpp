@@ -240,8 +240,8 @@ void real_ids(const std::string& dir, double res, double crop,
 
 // The held-out evaluation (eval/heldout.hpp, as `knnocc eval --heldout` with 5 folds) of the
 // OctoMap, k-NN and 2022 models and the robust model's variants on a real set with ids: recall,
-// and the seen-through and unconfirmed voxels at margins 0 and 0.3 m (each fold's map scored at
-// both).
+// and the seen-through voxels at margins 0 and 0.3 m, all of them and those the held-out
+// keyframes saw only empty (each fold's map scored at both margins).
 void heldout_rows(const std::string& dir, double res, double crop,
                   const std::vector<bench::RobustVariant>& vars) {
   const io::Sequence seq = io::Sequence::open(dir);
@@ -249,21 +249,15 @@ void heldout_rows(const std::string& dir, double res, double crop,
   // The 2022 model maps whole clouds (it cuts at its own inner range), as in the tool.
   const std::vector<eval::IdKeyframe> whole = crop > 0 ? eval::id_keyframes(seq, -1.0) : kfs;
   std::printf(
-      "  held out (5 folds): recall; seen-through and unconfirmed voxels at margins 0 / 0.3 m\n");
+      "  held out (5 folds): recall; seen-through voxels at margins 0 / 0.3 m, all and seen only "
+      "empty\n");
+  std::vector<eval::HeldoutOptions> margins(2);
+  margins[1].end_margin = 0.3;
   auto row = [&](const std::string& name, const auto& build) {
-    eval::HeldoutOptions opt;
-    eval::HeldoutScore at[2];
-    for (std::size_t f = 0; f < opt.folds; ++f) {
-      const OccupancyMap<OcKey> map = build(eval::fold_indices(kfs.size(), opt.folds, f, false));
-      const auto held = eval::fold_indices(kfs.size(), opt.folds, f, true);
-      for (int m = 0; m < 2; ++m) {
-        opt.end_margin = m ? 0.3 : 0.0;
-        at[m] += eval::score_heldout(map, kfs, held, opt);
-      }
-    }
-    std::printf("  %-9s recall %.4f  seen-through %5zu / %4zu  unconfirmed %5zu / %4zu\n",
+    const std::vector<eval::HeldoutScore> at = eval::evaluate_heldout(kfs, margins, build);
+    std::printf("  %-9s recall %.4f  seen-through %5zu / %4zu  seen only empty %5zu / %4zu\n",
                 name.c_str(), at[0].recall(), at[0].seen_through, at[1].seen_through,
-                at[0].seen_through - at[0].confirmed, at[1].seen_through - at[1].confirmed);
+                at[0].seen_empty_only(), at[1].seen_empty_only());
   };
   row("octomap", [&](const std::vector<std::size_t>& train) {
     return cli::map_keyframes(kfs, train, res, OctoMapModel{});

@@ -72,7 +72,7 @@ TEST_CASE("heldout: recall and seen-through voxels equal a brute force with dens
   std::mt19937_64 rng(2024);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::uniform_real_distribution<float> lo(-2.0f, 2.0f);
-  std::size_t total_through = 0, total_recalled = 0, total_confirmed = 0, clipped = 0;
+  std::size_t total_through = 0, total_recalled = 0, total_both = 0, clipped = 0;
   for (int trial = 0; trial < 12; ++trial) {
     const double res = trial % 2 ? 0.1 : 0.07;
     OccupancyMap<OcKey> map(res);
@@ -157,7 +157,7 @@ TEST_CASE("heldout: recall and seen-through voxels equal a brute force with dens
       CHECK_MESSAGE(near, "a walked voxel that no ray comes near");
     }
     CHECK(s.occupied == map.count_voxels().occupied);
-    // Confirmed: the walked voxels that hold a scored point.
+    // Seen both ways: the walked voxels that hold a scored point.
     std::set<std::uint64_t> scored_voxels;
     for (const auto& e : observers) {
       OcKey k;
@@ -165,10 +165,11 @@ TEST_CASE("heldout: recall and seen-through voxels equal a brute force with dens
       if (e.second.size() >= opt.min_views && key_of(res, p.x, p.y, p.z, k))
         scored_voxels.insert(k.pack());
     }
-    std::size_t confirmed = 0;
-    for (const std::uint64_t k : walked_set) confirmed += scored_voxels.count(k);
-    CHECK(s.confirmed == confirmed);
-    total_confirmed += confirmed;
+    std::size_t both = 0;
+    for (const std::uint64_t k : walked_set) both += scored_voxels.count(k);
+    CHECK(s.seen_both == both);
+    CHECK(s.seen_empty_only() == s.seen_through - both);
+    total_both += both;
     // The walk behind the score, crossing by crossing: held-out keyframes' rays to scored points,
     // occupied voxels only, the same voxels and the same ray count.
     std::set<std::uint64_t> crossed;
@@ -192,7 +193,7 @@ TEST_CASE("heldout: recall and seen-through voxels equal a brute force with dens
   CHECK(clipped * 20 < total_through);
   CHECK(total_through > 100);
   CHECK(total_recalled > 20);
-  CHECK(total_confirmed > 0);
+  CHECK(total_both > 0);
 }
 
 TEST_CASE("heldout: interleaved folds; every fold's map built from the others and summed") {
@@ -232,9 +233,24 @@ TEST_CASE("heldout: interleaved folds; every fold's map built from the others an
     CHECK(total.points == sum.points);
     CHECK(total.recalled == sum.recalled);
     CHECK(total.seen_through == sum.seen_through);
-    CHECK(total.confirmed == sum.confirmed);
+    CHECK(total.seen_both == sum.seen_both);
     CHECK(total.points > 0);
     CHECK(total.recall() > 0.9);  // the pool is small: training keyframes saw nearly every point
+    // Several options on one map per fold: each score equals that option's own evaluation.
+    eval::HeldoutOptions margin = opt;
+    margin.end_margin = 0.2;
+    margin.min_views = 3;
+    const auto both =
+        eval::evaluate_heldout(kfs, std::vector<eval::HeldoutOptions>{opt, margin}, build);
+    REQUIRE(both.size() == 2);
+    const eval::HeldoutScore alone = eval::evaluate_heldout(kfs, margin, build);
+    CHECK(both[0].seen_through == total.seen_through);
+    CHECK(both[0].recalled == total.recalled);
+    CHECK(both[1].points == alone.points);
+    CHECK(both[1].recalled == alone.recalled);
+    CHECK(both[1].seen_through == alone.seen_through);
+    CHECK(both[1].seen_both == alone.seen_both);
+    CHECK(both[1].rays < both[0].rays);  // min_views 3 scores fewer points
   }
   eval::HeldoutOptions bad;
   bad.folds = 1;
@@ -248,6 +264,8 @@ TEST_CASE("heldout: the floor equals the fewest seen-through voxels of every map
   // Small scenes with coarse voxels, so that held-out rays cross voxels holding held-out points.
   // Every pair of fold maps over the voxels holding scored points is scored; the floor must be
   // the least seen-through count among the pairs that recall at least r points, for every r.
+  // In odd scenes each keyframe sees a point a little off its position (a point's rays may cross
+  // its own voxel); every third scene stops the rays short of their points.
   const double res = 1.0;  // eight voxels hold the pool: several points share one
   std::mt19937_64 rng(21);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -260,12 +278,15 @@ TEST_CASE("heldout: the floor equals the fewest seen-through voxels of every map
       kf.origin = {u(rng) * 3, u(rng) * 3, u(rng) * 3};
       for (std::size_t id = 0; id < pool.size(); ++id)
         if (rng() % 3 != 0) {
-          kf.points.push_back(pool[id]);
+          const Point3d& p = pool[id];
+          const double j = scenes % 2 ? 0.1 : 0.0;  // odd scenes: off the point's position
+          kf.points.push_back({p.x + j * u(rng), p.y + j * u(rng), p.z + j * u(rng)});
           kf.ids.push_back(id);
         }
     }
     eval::HeldoutOptions opt;
     opt.folds = 2;
+    opt.end_margin = scenes % 3 == 2 ? 0.4 : 0.0;
     const Grid<OcKey> grid(res);
     std::vector<OcKey> voxels;  // every voxel holding a scored point of either fold
     for (std::size_t f = 0; f < 2; ++f)

@@ -95,7 +95,7 @@ interleaved folds (fold f: keyframes i with i % F == f); each fold is scored aga
 the other folds' keyframes, built with --model (all: one line each) at --res (default 0.1) with
 the model's defaults (knn2022: its flags below), as `knnocc map` builds it; sums over the folds:
   heldout MODEL folds F points N recall X rays N seen_through N occupied N seen_through_share X
-          floor N confirmed N [seen_through/octomap X % unconfirmed/octomap X %]
+          floor N seen_both N [seen_through/octomap X % empty_only/octomap X %]
   points        map points that >= --min-views (2) held-out keyframes observe
   recall        of those, the share whose voxel is occupied
   rays          the held-out rays to those points
@@ -103,10 +103,10 @@ the model's defaults (knn2022: its flags below), as `knnocc map` builds it; sums
                 not built from saw them empty), and their share of the occupied voxels
   floor         the fewest seen_through voxels of any maps with MODEL's recall: held-out points
                 lie in voxels that other held-out rays cross (depth edges, grazing rays, noise)
-  confirmed     of the seen_through voxels, those holding a point of `points`: held-out keyframes
-                saw them empty and occupied (a depth edge); unconfirmed: the others
-With the OctoMap model, a last line gives the floor at its recall less two points:
-  heldout floor    recall X (octomap's - 0.02) seen_through N (X % of octomap's)
+  seen_both     of the seen_through voxels, those holding a point of `points`: held-out keyframes
+                saw them both empty and occupied (a depth edge); empty_only: the others
+With the OctoMap model, a last line gives the floor at its recall less 2 percentage points:
+  heldout_floor recall X (octomap's - 0.02) seen_through N (X % of octomap's)
 It needs no ground truth and no rule of any model.
 
 The OctoMap model at its best (--tune-octomap SEQ --reference REF): SEQ mapped with the OctoMap

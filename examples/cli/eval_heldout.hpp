@@ -130,26 +130,25 @@ inline int run_eval_heldout(const Args& args) {
     if (std::string(name) == "octomap") octomap = s;
     std::printf(
         "heldout %-8s folds %zu points %zu recall %.4f rays %zu seen_through %zu occupied %zu "
-        "seen_through_share %.4f floor %zu confirmed %zu",
+        "seen_through_share %.4f floor %zu seen_both %zu",
         name, opt.folds, s.points, s.recall(), s.rays, s.seen_through, s.occupied,
-        s.seen_through_share(), floor.fewest_seen_through(s.recalled).value(), s.confirmed);
+        s.seen_through_share(), floor.fewest_seen_through(s.recalled).value(), s.seen_both);
     if (octomap.occupied > 0 && octomap.seen_through > 0)
       std::printf(" seen_through/octomap %.1f %%",
                   100.0 * double(s.seen_through) / double(octomap.seen_through));
-    if (octomap.seen_through > octomap.confirmed)
-      std::printf(" unconfirmed/octomap %.1f %%",
-                  100.0 * double(s.seen_through - s.confirmed) /
-                      double(octomap.seen_through - octomap.confirmed));
+    if (octomap.seen_empty_only() > 0)
+      std::printf(" empty_only/octomap %.1f %%",
+                  100.0 * double(s.seen_empty_only()) / double(octomap.seen_empty_only()));
     std::printf("\n");
     std::fflush(stdout);
   });
   if (octomap.points > 0 && octomap.seen_through > 0) {
-    // The recall goal beside OctoMap's (docs/evaluation.md): its recall less two points.
+    // The recall goal beside OctoMap's (docs/evaluation.md): its recall less 2 percentage points.
     const double recall = std::max(0.0, octomap.recall() - 0.02);
     const auto need = static_cast<std::size_t>(std::ceil(recall * double(octomap.points) - 1e-9));
     const std::size_t least = floor.fewest_seen_through(need).value();  // OctoMap's maps reach it
     std::printf(
-        "heldout floor    recall %.4f (octomap's - 0.02) seen_through %zu (%.1f %% of octomap's)\n",
+        "heldout_floor recall %.4f (octomap's - 0.02) seen_through %zu (%.1f %% of octomap's)\n",
         recall, least, 100.0 * double(least) / double(octomap.seen_through));
   }
   return 0;

@@ -13,8 +13,9 @@
 //   seen_through  distinct occupied voxels of the map that such a ray passes through before its
 //                 end voxel (the voxels the held-out keyframe saw empty: a contradiction of the
 //                 map by data it was not built from); the origin voxel counts, the end voxel not
-//   confirmed     of those, the ones holding a scored point: voxels the held-out keyframes both
-//                 saw empty and saw occupied (as at a depth edge), against the map only in part
+//   seen_both     of those, the ones holding a scored point: voxels the held-out keyframes saw
+//                 both empty and occupied (as at a depth edge), against the map only in part;
+//                 the others the held-out keyframes saw only empty (seen_empty_only())
 //   occupied      occupied voxels of the map (seen_through is a share of it)
 // Scores are summed over the folds (each fold's map counts its own voxels). Only rays to
 // multi-view points are walked: the ray of a wrong match seen once ends off the surface and
@@ -66,19 +67,21 @@ struct HeldoutOptions {
 };
 
 struct HeldoutScore {
-  std::size_t points = 0, recalled = 0, rays = 0, seen_through = 0, confirmed = 0, occupied = 0;
+  std::size_t points = 0, recalled = 0, rays = 0, seen_through = 0, seen_both = 0, occupied = 0;
 
   double recall() const { return points ? double(recalled) / double(points) : 0.0; }
   /// seen_through as a share of the occupied voxels.
   double seen_through_share() const {
     return occupied ? double(seen_through) / double(occupied) : 0.0;
   }
+  /// The seen-through voxels the held-out keyframes saw only empty.
+  std::size_t seen_empty_only() const { return seen_through - seen_both; }
   HeldoutScore& operator+=(const HeldoutScore& o) {
     points += o.points;
     recalled += o.recalled;
     rays += o.rays;
     seen_through += o.seen_through;
-    confirmed += o.confirmed;
+    seen_both += o.seen_both;
     occupied += o.occupied;
     return *this;
   }
@@ -193,7 +196,7 @@ HeldoutScore score_heldout(const OccupancyMap<Key>& map, const std::vector<IdKey
       for_each_seen_through(map, keyframes, heldout, seen, opt,
                             [&](std::size_t, std::size_t, const Key& k) { through.insert(k); });
   s.seen_through = through.size();
-  for (const Key& k : through) s.confirmed += scored.count(k);
+  for (const Key& k : through) s.seen_both += scored.count(k);
   if (seen_through) seen_through->assign(through.begin(), through.end());
   s.occupied = map.count_voxels().occupied;
   return s;
@@ -207,18 +210,30 @@ inline void check_folds(const HeldoutOptions& opt, std::size_t keyframes) {
 }  // namespace detail
 
 /// All folds: build(train) (train: the other folds' keyframe indices, in order) returns the map
-/// of those keyframes, scored against the fold. folds < 2 or more folds than keyframes:
+/// of those keyframes, scored against the fold under each of `opts` (one map per fold for all of
+/// them; the folds are opts[0]'s); one score per option. folds < 2 or more folds than keyframes:
 /// std::invalid_argument.
+template <class Build>
+std::vector<HeldoutScore> evaluate_heldout(const std::vector<IdKeyframe>& keyframes,
+                                           const std::vector<HeldoutOptions>& opts, Build&& build) {
+  std::vector<HeldoutScore> total(opts.size());
+  if (opts.empty()) return total;
+  const std::size_t folds = opts[0].folds;
+  detail::check_folds(opts[0], keyframes.size());
+  for (std::size_t f = 0; f < folds; ++f) {
+    const auto map = build(fold_indices(keyframes.size(), folds, f, false));
+    const auto held = fold_indices(keyframes.size(), folds, f, true);
+    for (std::size_t o = 0; o < opts.size(); ++o)
+      total[o] += score_heldout(map, keyframes, held, opts[o]);
+  }
+  return total;
+}
+
+/// The same under one option.
 template <class Build>
 HeldoutScore evaluate_heldout(const std::vector<IdKeyframe>& keyframes, const HeldoutOptions& opt,
                               Build&& build) {
-  detail::check_folds(opt, keyframes.size());
-  HeldoutScore total;
-  for (std::size_t f = 0; f < opt.folds; ++f) {
-    const auto map = build(fold_indices(keyframes.size(), opt.folds, f, false));
-    total += score_heldout(map, keyframes, fold_indices(keyframes.size(), opt.folds, f, true), opt);
-  }
-  return total;
+  return evaluate_heldout(keyframes, std::vector<HeldoutOptions>{opt}, build).front();
 }
 
 /// What no map can beat on the same held-out keyframes: a scored point is recalled only through

@@ -10,6 +10,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -251,6 +252,11 @@ TEST_CASE("heldout: interleaved folds; every fold's map built from the others an
     CHECK(both[1].seen_through == alone.seen_through);
     CHECK(both[1].seen_both == alone.seen_both);
     CHECK(both[1].rays < both[0].rays);  // min_views 3 scores fewer points
+    eval::HeldoutOptions other_folds = opt;
+    other_folds.folds = folds + 1;
+    CHECK_THROWS_AS(
+        eval::evaluate_heldout(kfs, std::vector<eval::HeldoutOptions>{opt, other_folds}, build),
+        std::invalid_argument);
   }
   eval::HeldoutOptions bad;
   bad.folds = 1;

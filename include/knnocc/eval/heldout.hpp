@@ -211,8 +211,8 @@ inline void check_folds(const HeldoutOptions& opt, std::size_t keyframes) {
 
 /// All folds: build(train) (train: the other folds' keyframe indices, in order) returns the map
 /// of those keyframes, scored against the fold under each of `opts` (one map per fold for all of
-/// them; the folds are opts[0]'s); one score per option. folds < 2 or more folds than keyframes:
-/// std::invalid_argument.
+/// them); one score per option. folds < 2, more folds than keyframes, or options that differ in
+/// folds: std::invalid_argument.
 template <class Build>
 std::vector<HeldoutScore> evaluate_heldout(const std::vector<IdKeyframe>& keyframes,
                                            const std::vector<HeldoutOptions>& opts, Build&& build) {
@@ -220,6 +220,10 @@ std::vector<HeldoutScore> evaluate_heldout(const std::vector<IdKeyframe>& keyfra
   if (opts.empty()) return total;
   const std::size_t folds = opts[0].folds;
   detail::check_folds(opts[0], keyframes.size());
+  for (const HeldoutOptions& o : opts)
+    if (o.folds != folds)
+      knnocc::detail::invalid_argument(
+          "held-out evaluation: every option must have the same folds");
   for (std::size_t f = 0; f < folds; ++f) {
     const auto map = build(fold_indices(keyframes.size(), folds, f, false));
     const auto held = fold_indices(keyframes.size(), folds, f, true);

@@ -63,6 +63,21 @@ constexpr bool shifted_key(const BasicKey<Bits>& k, int dx, int dy, int dz, Basi
 using OcKey = BasicKey<16>;    ///< OctoMap-compatible key (OcTreeKey)
 using WideKey = BasicKey<21>;  ///< wide key for maps beyond ±3.2 km at 0.1 m
 
+/// The keys with lo[a] <= k[a] <= hi[a] on every axis: a box of voxels, e.g. one tile of a map
+/// (tiles/tile_grid.hpp) to which an integrator restricts its updates.
+template <class Key>
+struct KeyBounds {
+  Key lo, hi;
+
+  constexpr bool contains(const Key& k) const {
+    return k[0] >= lo[0] && k[0] <= hi[0] && k[1] >= lo[1] && k[1] <= hi[1] && k[2] >= lo[2] &&
+           k[2] <= hi[2];
+  }
+  friend constexpr bool operator==(const KeyBounds& a, const KeyBounds& b) {
+    return a.lo == b.lo && a.hi == b.hi;
+  }
+};
+
 template <class T>
 struct is_key : std::false_type {};
 template <int Bits>

@@ -29,6 +29,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <iterator>
+#include <optional>
 #include <vector>
 
 #include "../core/config.hpp"
@@ -37,6 +38,7 @@
 #include "../map/occupancy_map.hpp"
 #include "../raycast/dda.hpp"
 #include "../sensor/layered_rating.hpp"
+#include "detail/clip.hpp"
 #include "scan_stats.hpp"
 
 namespace knnocc {
@@ -55,6 +57,19 @@ class LayeredScanInserter {
   }
 
   map_type& map() { return *map_; }
+
+  /// Restricts the following keyframes to the voxels of `bounds`, as ScanInserter::set_clip:
+  /// every voxel inside gets exactly the update of the whole keyframe, none outside is touched.
+  void set_clip(const KeyBounds<Key>& bounds) {
+    detail::KeyBox b;
+    for (int a = 0; a < 3; ++a) {
+      b.lo[a] = bounds.lo[a];
+      b.hi[a] = bounds.hi[a];
+    }
+    clip_ = bounds;
+    clip_box_ = b;
+  }
+  void clear_clip() { clip_.reset(); }
 
   /// One keyframe: ratings[i] rates points[i] (same length, else std::invalid_argument);
   /// max_range < 0: no limit, 0 or NaN rejected.
@@ -108,7 +123,7 @@ class LayeredScanInserter {
         ++st.out_of_range;
         return;
       }
-      if (r.hit) hits_.push_back({k.pack(), order, r.logodds});
+      if (r.hit && (!clip_ || clip_->contains(k))) hits_.push_back({k.pack(), order, r.logodds});
     } else {
       ++st.beyond_max_range;
     }
@@ -117,10 +132,14 @@ class LayeredScanInserter {
     if (max_range >= 0.0 && (cut < 0.0 || max_range < cut)) cut = max_range;
     const Point3f end = cut >= 0.0 && range > cut ? truncate_ray(o, q, cut) : q;
     std::vector<std::uint64_t>& out = r.ray == RayLayer::strong ? strong_ : weak_;
-    for_each_ray_key(map_->grid(), o, end, [&](const Key& k) {
+    auto add = [&](const Key& k) {
       out.push_back(k.pack());
       ++st.ray_keys;
-    });
+    };
+    if (clip_)
+      detail::for_each_ray_key_in(map_->grid(), o, end, clip_box_, add);
+    else
+      for_each_ray_key(map_->grid(), o, end, add);
   }
 
   static void sort_unique(std::vector<std::uint64_t>& v) {
@@ -162,6 +181,8 @@ class LayeredScanInserter {
   }
 
   map_type* map_;
+  std::optional<KeyBounds<Key>> clip_;  // set_clip
+  detail::KeyBox clip_box_{};           // the same as a KeyBox
   // The keyframe's hits and ray keys (packed), kept for their memory.
   std::vector<Hit> hits_;
   std::vector<std::uint64_t> hit_keys_, strong_, weak_, free_;

@@ -71,6 +71,7 @@
 #include "../sensor/endpoint_rating.hpp"
 #include "../sensor/octomap_model.hpp"
 #include "detail/brick_updates.hpp"
+#include "detail/clip.hpp"
 #include "detail/collect.hpp"
 #include "detail/dense_box.hpp"
 #include "detail/rated_sums.hpp"
@@ -136,13 +137,29 @@ class ScanInserter {
       u.ray_blocks += sizeof(*s.block);
       u.hashed += s.hashed.memory_usage();
       u.other += (s.row_hit.capacity() + s.row_miss.capacity()) * sizeof(VoxelMask) +
-                 s.hit_codes.memory_usage() + s.row_any.capacity() * sizeof(std::uint64_t);
+                 s.crossing.capacity() * sizeof(detail::RayEnd) + s.hit_codes.memory_usage() +
+                 s.row_any.capacity() * sizeof(std::uint64_t);
     }
     u.brick_groups = apply_lists_bytes();
     u.other += first_chunk_.capacity() * sizeof(std::size_t) +
                endpoints_.capacity() * sizeof(std::uint64_t) + sums_.capacity() * sizeof(sums_[0]);
     return u;
   }
+
+  /// Restricts the following scans to the voxels of `bounds` (a tile of a larger map,
+  /// tiles/tile_integrator.hpp): every voxel inside gets exactly the update the whole scan gives
+  /// it, no voxel outside is touched, and a ray that cannot reach the box is not walked
+  /// (detail/clip.hpp). clear_clip() lifts the restriction.
+  void set_clip(const KeyBounds<Key>& bounds) {
+    detail::KeyBox b;
+    for (int a = 0; a < 3; ++a) {
+      b.lo[a] = bounds.lo[a];
+      b.hi[a] = bounds.hi[a];
+    }
+    clip_ = b;
+  }
+  void clear_clip() { clip_.reset(); }
+  bool clipped() const { return clip_.has_value(); }
 
   /// Inserts one scan of world-frame points seen from `origin`. max_range < 0: no limit;
   /// max_range == 0 or NaN is rejected (std::invalid_argument; abort without exceptions).
@@ -160,7 +177,8 @@ class ScanInserter {
     const auto scan_origin = detail::ScanOrigin::of(map_->grid(), o);
     const detail::ScanValues values{model_.hit_logodds(), model_.miss_logodds(), false};
     if constexpr (detail::random_access_points<Points>) {
-      if (!discretize && insert_chunked(scan_origin, points, max_range, values, st)) return st;
+      if (!discretize && !clip_ && insert_chunked(scan_origin, points, max_range, values, st))
+        return st;
     }
     const detail::CollectedScan scan = collect(scan_origin, points, max_range, discretize, nullptr);
     add_counts(scan.counts, st);
@@ -250,7 +268,11 @@ class ScanInserter {
     detail::CollectedScan scan;
     scan.box = detail::KeyBox::empty<Key>();
     for (unsigned t = 0; t < threads(); ++t) {
-      const detail::ScanPart& part = scratch(t).part;
+      detail::ScanPart& part = scratch(t).part;
+      std::vector<detail::RayEnd>& crossing = scratch(t).crossing;
+      crossing.clear();
+      if (clip_) detail::clip_part<Key>(part, o, *clip_, crossing);
+      scan.crossing += crossing.size();
       scan.box.merge(part.box);
       scan.steps += part.steps;
       scan.rays += part.rays.size();
@@ -264,7 +286,7 @@ class ScanInserter {
 
   void walk_and_apply(const detail::ScanOrigin& o, const detail::CollectedScan& scan,
                       const detail::ScanValues& values, ScanStats& st) {
-    if (scan.hits == 0 && scan.rays == 0) return;
+    if (scan.hits == 0 && scan.rays == 0 && scan.crossing == 0) return;
     detail::RayChunks rays(scratch_, threads(), scan.rays, first_chunk_);
     // Under a map memory limit the dense scratch takes at most half of the room the map leaves.
     const std::size_t limit = map_->memory_limit(), in_map = map_->memory_usage();
@@ -282,6 +304,7 @@ class ScanInserter {
         mine.visits = walk_dense_rays(mine, fan, [&rays](const RayEnd*& pos, const RayEnd*& stop) {
           return rays.take(pos, stop);
         });
+        if (!mine.crossing.empty()) mine.visits += walk_crossing_dense(mine, o);
       };
       team_.run(job);
       add_visits(st);
@@ -376,6 +399,22 @@ class ScanInserter {
                             *mine.block, more, marks);
   }
 
+  // A clipped scan's crossing rays (detail/clip.hpp) into the thread's miss bitmap, whose box
+  // holds their voxels inside the clip; returns the voxels marked.
+  std::size_t walk_crossing_dense(detail::ThreadScratch& mine, const detail::ScanOrigin& o) {
+    detail::ScanBitmap& miss = mine.miss;
+    if (miss.has_bytes()) {
+      const detail::ByteMarks marks{miss.bytes()};
+      return detail::walk_crossing(
+          map_->grid(), o, mine.crossing, *clip_,
+          [&](const KeyPosition& p) { marks(miss.index(p.k[0], p.k[1], p.k[2])); });
+    }
+    const detail::BitMarks marks{miss.words()};
+    return detail::walk_crossing(map_->grid(), o, mine.crossing, *clip_, [&](const KeyPosition& p) {
+      marks(miss.index(p.k[0], p.k[1], p.k[2]));
+    });
+  }
+
   // The hashed path: every hit into the first thread's bricks, then each thread's chunks of rays
   // into its own bricks' miss masks, walked one ray at a time.
   void walk_hashed(const detail::ScanOrigin& o, detail::RayChunks& rays) {
@@ -399,6 +438,9 @@ class ScanInserter {
           visit(at);  // the origin voxel
           walk_ray(state, at, visit);
         }
+      if (clip_)
+        detail::walk_crossing(map_->grid(), o, scratch(t).crossing, *clip_,
+                              [&visit](const KeyPosition& p) { visit(p); });
       scratch(t).visits = visit.visits;
     };
     team_.run(job);
@@ -543,6 +585,7 @@ class ScanInserter {
 
   map_type* map_;
   Model model_;
+  std::optional<detail::KeyBox> clip_;  // set_clip
   std::size_t scratch_limit_ = std::size_t{384} << 20;
   detail::Team team_;
   detail::ThreadScratches scratch_;  // one per thread, [0] the calling thread's

@@ -27,6 +27,7 @@ struct UpdateCounts {
 
 struct ThreadScratch {
   ScanPart part;                         // collect: this thread's share of the points
+  std::vector<RayEnd> crossing;          // collect, clipped scans: rays that cross the clip
   PointBounds bounds;                    // collect, chunked scans: the bounds of its share
   ScanBitmap hit, miss;                  // walk, dense scratch: endpoints and free voxels
   AppendBuffer<std::uint32_t> hit_list;  // collect, chunked scans with few points: hit codes

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// knnocc umbrella header: every public header but those of io/, eval/ and sim/ (they read and
+// knnocc umbrella header: every public header but those of io/, eval/, sim/ and tiles/ (they read and
 // write files and need Eigen: include those one by one). tests/include_layers checks that this
 // list is complete.
 // Prefer the module headers in your own code: include only what you use.
@@ -45,6 +45,7 @@
 #include "sensor/layered_rating.hpp"
 #include "sensor/map_point_ledger.hpp"
 #include "sensor/octomap_model.hpp"
+#include "sensor/rated_keyframe.hpp"
 #include "sensor/real_point_mixture.hpp"
 #include "sensor/robust_model.hpp"
 #include "sensor/sensor_model.hpp"

@@ -75,6 +75,7 @@
 #include "sensor/endpoint_rating.hpp"
 #include "sensor/layered_rating.hpp"
 #include "sensor/octomap_model.hpp"
+#include "sensor/rated_keyframe.hpp"
 #include "sensor/sensor_model.hpp"
 
 namespace knnocc {
@@ -214,15 +215,71 @@ class Mapper {
   KeyframeStats insert_keyframe(const Origin& origin, const Points& points,
                                 const std::vector<std::uint64_t>& ids,
                                 const std::vector<PointEvidence>& evidence) {
+    if constexpr (!uses_map_cloud && !rates_cloud) {  // the caller's points, without a copy
+      (void)ids;
+      (void)evidence;
+      KeyframeStats ks;
+      ks.scan =
+          integrator_.insert_point_cloud(origin, points, options_.max_range, options_.discretize);
+      return ks;
+    } else {
+      KeyframeStats ks = rate(origin, points, ids, evidence, rated_);
+      integrate_rated(ks);
+      return ks;
+    }
+  }
+
+  /// Alg. 3 with the map cloud's change given by the caller (k-NN model): `change` is applied to
+  /// the tracker first, then the points (ids: one per point, the map points they observe) are
+  /// rated with their s_{p,t}. A point whose id is not in the map cloud gets no s (unrated).
+  template <class Points, class Origin, bool B = uses_map_cloud, std::enable_if_t<B, int> = 0>
+  KeyframeStats insert_keyframe(const Origin& origin, const Points& points,
+                                const std::vector<std::uint64_t>& ids, const ChangeSet& change) {
+    use_mode(Mode::explicit_change);
+    if (ids.size() != static_cast<std::size_t>(std::distance(std::begin(points), std::end(points))))
+      detail::invalid_argument("insert_keyframe: one id per point expected");
     KeyframeStats ks;
+    rated_.clear();
+    rated_.kind = kind;
+    if (!load(origin, points, ids, ks)) return ks;
+    ids_given_ = true;
+    ks.tracker = tracker_.apply(change);
+    point_ids_.assign(world_.size(), KeyframeUnion::kNoId);
+    for (std::size_t j = 0; j < world_.size(); ++j)
+      if (within_range(j)) point_ids_[j] = ids[j];
+    rate_loaded(ks, {}, rated_);
+    integrate_rated(ks);
+    return ks;
+  }
+
+  /// The first half of insert_keyframe (same arguments): the keyframe rated into `out` (its
+  /// world-frame points as the integrator casts them, their ratings, a contextual model's edits;
+  /// sensor/rated_keyframe.hpp) with the map point cloud, the tracker and the model's state
+  /// updated, and the map untouched. integrate(out), here or in a map or tile elsewhere
+  /// (tiles/tile_integrator.hpp), is the second half. Returns the rating's statistics (the scan's
+  /// are integrate()'s; a non-finite origin: scan.origin_valid false and nothing to integrate).
+  template <class Points, class Origin>
+  KeyframeStats rate(const Origin& origin, const Points& points,
+                     const std::vector<std::uint64_t>& ids,
+                     const std::vector<PointEvidence>& evidence, RatedKeyframe& out) {
+    KeyframeStats ks;
+    out.clear();
+    out.kind = kind;
     if constexpr (rates_cloud) {
       (void)ids;
-      insert_rated_cloud(origin, points, ks);
+      (void)evidence;
+      if (!load(origin, points, {}, ks)) return ks;
+      model_.rate_cloud(origin_, world_, out.layered);
+      for (const LayeredRating& r : out.layered) {
+        ks.rated += r.hit;
+        ks.rays += r.ray == RayLayer::strong;
+      }
+      take_points(out);
     } else if constexpr (!uses_map_cloud) {
       (void)ids;
       (void)evidence;
-      ks.scan =
-          integrator_.insert_point_cloud(origin, points, options_.max_range, options_.discretize);
+      if (!load(origin, points, {}, ks)) return ks;
+      take_points(out);
     } else {
       use_mode(Mode::keyframe_union);
       if (!load(origin, points, ids, ks)) return ks;
@@ -236,7 +293,7 @@ class Mapper {
           point_ids_.assign(world_.size(), KeyframeUnion::kNoId);
           for (std::size_t j = 0; j < world_.size(); ++j)
             if (within_range(j)) point_ids_[j] = j;  // any id: the model does not look it up
-          rate_and_insert(ks, evidence);
+          rate_loaded(ks, evidence, out);
           return ks;
         }
         if (!ids.empty() && without_ids_)
@@ -256,30 +313,53 @@ class Mapper {
       for (std::size_t j = 0, c = 0; j < world_.size(); ++j)
         if (within_range(j)) point_ids_[j] = cloud_map_ids_[c++];
       ks.tracker = tracker_.apply(change);
-      rate_and_insert(ks, evidence);
+      rate_loaded(ks, evidence, out);
     }
     return ks;
   }
 
-  /// Alg. 3 with the map cloud's change given by the caller (k-NN model): `change` is applied to
-  /// the tracker first, then the points (ids: one per point, the map points they observe) are
-  /// rated with their s_{p,t}. A point whose id is not in the map cloud gets no s (unrated).
-  template <class Points, class Origin, bool B = uses_map_cloud, std::enable_if_t<B, int> = 0>
-  KeyframeStats insert_keyframe(const Origin& origin, const Points& points,
-                                const std::vector<std::uint64_t>& ids, const ChangeSet& change) {
-    use_mode(Mode::explicit_change);
-    if (ids.size() != static_cast<std::size_t>(std::distance(std::begin(points), std::end(points))))
-      detail::invalid_argument("insert_keyframe: one id per point expected");
-    KeyframeStats ks;
-    if (!load(origin, points, ids, ks)) return ks;
-    ids_given_ = true;
-    ks.tracker = tracker_.apply(change);
-    point_ids_.assign(world_.size(), KeyframeUnion::kNoId);
-    for (std::size_t j = 0; j < world_.size(); ++j)
-      if (within_range(j)) point_ids_[j] = ids[j];
-    rate_and_insert(ks);
-    return ks;
+  /// The second half of insert_keyframe: a keyframe this Mapper's model rated (rate(), here or
+  /// in another Mapper of the same model and options) into the map: its scan, then its edits.
+  ScanStats integrate(const RatedKeyframe& rk) {
+    if (rk.kind != kind) detail::invalid_argument("integrate: a keyframe of another kind of model");
+    ScanStats st;
+    if constexpr (rates_cloud) {
+      st = integrator_.insert_layered(rk.origin, rk.points, rk.layered, model_.ray_layers(),
+                                      options_.max_range);
+    } else if constexpr (!uses_map_cloud) {
+      st = integrator_.insert_point_cloud(rk.origin, rk.points, options_.max_range,
+                                          options_.discretize);
+    } else {
+      st = integrator_.insert_rated(rk.origin, rk.points, rk.ratings, options_.max_range);
+    }
+    for (const MapEdit& e : rk.edits) apply_edit(*map_, e);
+    return st;
   }
+
+  /// What integrating this Mapper's rated keyframes needs besides them (a tile of the map:
+  /// tiles/tile_integrator.hpp).
+  IntegrationParams integration() const {
+    IntegrationParams p;
+    p.kind = kind;
+    p.max_range = options_.max_range;
+    p.discretize = options_.discretize;
+    p.occupancy = map_->params();
+    if constexpr (rates_cloud) {
+      p.layers = model_.ray_layers();
+      p.miss = p.layers.strong_miss;
+    } else if constexpr (!uses_map_cloud) {
+      p.hit = model_.hit_logodds();
+      p.miss = model_.miss_logodds();
+    } else {
+      p.miss = model_.miss_logodds();
+    }
+    return p;
+  }
+
+  /// The kind of keyframe this Mapper's model rates (sensor/rated_keyframe.hpp).
+  static constexpr RatingKind kind = rates_cloud      ? RatingKind::layered
+                                     : uses_map_cloud ? RatingKind::rated
+                                                      : RatingKind::fixed;
 
  private:
   static const MapperOptions& checked(const MapperOptions& o) {
@@ -342,28 +422,33 @@ class Mapper {
                                  options_.max_range) == detail::EndpointFate::inserted;
   }
 
-  // A cloud-rated model's keyframe: its ratings from its own points, then the layered scan.
-  template <class Origin, class Points>
-  void insert_rated_cloud(const Origin& origin, const Points& points, KeyframeStats& ks) {
-    if (!load(origin, points, {}, ks)) return;
-    model_.rate_cloud(origin_, world_, layered_);
-    for (const LayeredRating& r : layered_) {
-      ks.rated += r.hit;
-      ks.rays += r.ray == RayLayer::strong;
-    }
-    ks.scan = integrator_.insert_layered(origin_, world_, layered_, model_.ray_layers(),
-                                         options_.max_range);
+  // The loaded keyframe's points as the integrator casts them.
+  void take_points(RatedKeyframe& out) const {
+    out.origin = detail::to_point3f(origin_);
+    out.points.resize(world_.size());
+    for (std::size_t j = 0; j < world_.size(); ++j) out.points[j] = detail::to_point3f(world_[j]);
   }
 
-  // Eq 13-15 for the loaded keyframe, then the scan (Alg. 3).
-  void rate_and_insert(KeyframeStats& ks, const std::vector<PointEvidence>& evidence = {}) {
+  // Eq 13-14 (or the contextual model's rating) for the loaded keyframe, into `out`.
+  void rate_loaded(KeyframeStats& ks, const std::vector<PointEvidence>& evidence,
+                   RatedKeyframe& out) {
     if constexpr (contextual) {
-      rate_keyframe(ks, evidence);
+      rate_keyframe(ks, evidence, out);
     } else {
       (void)evidence;
       rate_each(ks);
-      ks.scan = integrator_.insert_rated(origin_, world_, ratings_, options_.max_range);
+      take_points(out);
+      out.ratings = ratings_;
     }
+  }
+
+  // The rated keyframe rated_ into the map (insert_keyframe's second half), its scan statistics
+  // into ks; a contextual model's scan counts every point of the keyframe, kept or not.
+  void integrate_rated(KeyframeStats& ks) {
+    if (!ks.scan.origin_valid) return;
+    const std::size_t points = ks.scan.points;
+    ks.scan = integrate(rated_);
+    if constexpr (contextual) ks.scan.points = points;
   }
 
   // Eq 13, 14 for each endpoint from its s_{p,t}.
@@ -386,15 +471,15 @@ class Mapper {
   }
 
   // A contextual model rates the whole keyframe (sensor/contextual_model.hpp); endpoints it rates
-  // {0, no ray} stay out of the scan; then it settles the keyframe.
-  void rate_keyframe(KeyframeStats& ks, const std::vector<PointEvidence>& evidence) {
+  // {0, no ray} stay out of the scan; then it settles the keyframe into edits.
+  void rate_keyframe(KeyframeStats& ks, const std::vector<PointEvidence>& evidence,
+                     RatedKeyframe& out) {
     const std::size_t n = world_.size();
     ratings_.assign(n, EndpointRating{0.0f, true});  // kNoId: truncated ray only
     const KeyframeView<Key, Tracker> view{keyframe_,  origin_,  world_,   point_ids_,
-                                          ids_given_, evidence, tracker_, *map_};
+                                          ids_given_, evidence, tracker_, map_->grid()};
     model_.rate_keyframe(view, ratings_);
-    kept_world_.clear();
-    kept_ratings_.clear();
+    out.origin = detail::to_point3f(origin_);
     for (std::size_t j = 0; j < n; ++j) {
       if (point_ids_[j] != KeyframeUnion::kNoId) {
         ++ks.rated;
@@ -402,13 +487,12 @@ class Mapper {
         ks.rays += ratings_[j].casts_ray;
       }
       if (ratings_[j].casts_ray || ratings_[j].logodds != 0.0f) {
-        kept_world_.push_back(world_[j]);
-        kept_ratings_.push_back(ratings_[j]);
+        out.points.push_back(detail::to_point3f(world_[j]));
+        out.ratings.push_back(ratings_[j]);
       }
     }
-    ks.scan = integrator_.insert_rated(origin_, kept_world_, kept_ratings_, options_.max_range);
     ks.scan.points = n;
-    model_.settle_keyframe(view, ratings_, *map_);
+    model_.settle_keyframe(view, ratings_, out.edits);
     ++keyframe_;
   }
 
@@ -424,13 +508,11 @@ class Mapper {
   std::vector<Point3d> world_, cloud_;
   std::vector<std::uint64_t> cloud_ids_, cloud_map_ids_, point_ids_, id_scratch_;
   std::vector<EndpointRating> ratings_;
-  std::vector<LayeredRating> layered_;  // cloud-rated model only
+  RatedKeyframe rated_;  // insert_keyframe: the keyframe between rating and integration
   bool ids_given_ = false;
   bool without_ids_ = false;  // keyframes without ids kept out of the map cloud (model's choice)
   // Contextual model only.
   std::size_t keyframe_ = 0;  // keyframes rated so far (KeyframeView::index)
-  std::vector<Point3d> kept_world_;
-  std::vector<EndpointRating> kept_ratings_;
 };
 
 }  // namespace knnocc

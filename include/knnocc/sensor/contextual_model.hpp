@@ -19,13 +19,17 @@
 //       update of 0 would make it known, and occupied).
 //   template <class Key, class Tracker>
 //   void settle_keyframe(const KeyframeView<Key, Tracker>& keyframe,
-//                        const std::vector<EndpointRating>& ratings, OccupancyMap<Key>& map);
-//       after the scan: the model may update the map itself (evidence of map points it held back
-//       and now accepts, evidence it takes back), and learns from the keyframe.
+//                        const std::vector<EndpointRating>& ratings, std::vector<MapEdit>& edits);
+//       then: the model learns from the keyframe and may append updates of single voxels to
+//       `edits` (sensor/rated_keyframe.hpp: evidence of map points it held back and now accepts,
+//       evidence it takes back), which are applied, in order, after the keyframe's scan.
 //
-// Both are called once per keyframe with a finite origin, in insertion order. The model is
-// copied when a Mapper is built from it (LiveMapper builds fresh Mappers from one pristine copy),
-// so a model's state starts empty in every Mapper it is given to.
+// Both are called once per keyframe with a finite origin, in insertion order, before the
+// keyframe's scan. A contextual model rates from the keyframe, the tracker and its own state,
+// never from the map's values: that is what makes a rated keyframe (sensor/rated_keyframe.hpp)
+// all a map or a tile of one needs. The model is copied when a Mapper is built from it
+// (LiveMapper builds fresh Mappers from one pristine copy), so a model's state starts empty in
+// every Mapper it is given to.
 //
 // Thread safety: a contextual model is written by its Mapper's insert; const queries are safe
 // while no insert runs.
@@ -36,10 +40,11 @@
 #include <utility>
 #include <vector>
 
+#include "../core/grid.hpp"
 #include "../core/point3.hpp"
 #include "../core/point_evidence.hpp"
-#include "../map/occupancy_map.hpp"
 #include "endpoint_rating.hpp"
+#include "rated_keyframe.hpp"
 
 namespace knnocc {
 
@@ -61,7 +66,7 @@ struct KeyframeView {
   /// The map point cloud's k-NN statistics (empty for keyframes without ids when the model
   /// declares map_cloud_without_ids = false).
   const Tracker& tracker;
-  const OccupancyMap<Key>& map;  ///< before this keyframe's scan (rate), after it (settle)
+  const Grid<Key>& grid;  ///< the map's grid (keys of points)
 };
 
 namespace detail {
@@ -77,12 +82,11 @@ struct has_rate_keyframe<M, Key, Tracker,
 template <class M, class Key, class Tracker, class = void>
 struct has_settle_keyframe : std::false_type {};
 template <class M, class Key, class Tracker>
-struct has_settle_keyframe<
-    M, Key, Tracker,
-    std::void_t<decltype(std::declval<M&>().settle_keyframe(
-        std::declval<const KeyframeView<Key, Tracker>&>(),
-        std::declval<const std::vector<EndpointRating>&>(), std::declval<OccupancyMap<Key>&>()))>>
-    : std::true_type {};
+struct has_settle_keyframe<M, Key, Tracker,
+                           std::void_t<decltype(std::declval<M&>().settle_keyframe(
+                               std::declval<const KeyframeView<Key, Tracker>&>(),
+                               std::declval<const std::vector<EndpointRating>&>(),
+                               std::declval<std::vector<MapEdit>&>()))>> : std::true_type {};
 
 /// A model that declares either half of the hook is a contextual model.
 template <class M, class Key, class Tracker>
@@ -99,7 +103,7 @@ constexpr bool check_contextual_model() {
   static_assert(has_settle_keyframe<M, Key, Tracker>::value,
                 "a contextual sensor model needs `template <class Key, class Tracker> void "
                 "settle_keyframe(const KeyframeView<Key, Tracker>&, const "
-                "std::vector<EndpointRating>&, OccupancyMap<Key>&)` "
+                "std::vector<EndpointRating>&, std::vector<MapEdit>&)` "
                 "(sensor/contextual_model.hpp)");
   return true;
 }

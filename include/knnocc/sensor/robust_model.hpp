@@ -184,12 +184,12 @@ class BasicRobustModel {
     if (kf.has_ids) see_through(kf, ratings);
   }
 
-  /// The contextual hook, after the scan: the evidence added, one EM step (with the keyframe's
-  /// see-throughs, counted before the scan), and every point's evidence put in or taken back
-  /// accordingly.
+  /// The contextual hook, after the ratings: the evidence added, one EM step (with the
+  /// keyframe's see-throughs), and every point's evidence put in or taken back accordingly, as
+  /// edits applied after the keyframe's scan.
   template <class Key, class Tracker>
   void settle_keyframe(const KeyframeView<Key, Tracker>& kf,
-                       const std::vector<EndpointRating>& ratings, OccupancyMap<Key>& map) {
+                       const std::vector<EndpointRating>& ratings, std::vector<MapEdit>& edits) {
     if (!kf.has_ids) return;
     for (std::size_t j = 0; j < kf.points.size(); ++j) {
       if (kf.ids[j] == KeyframeUnion::kNoId || ratings[j].logodds == 0.0f) continue;
@@ -212,11 +212,11 @@ class BasicRobustModel {
       const bool real = !found || mixture_.bin_log_odds(p.bin) >= 0.0;
       if (real == p.believed) return;
       if (!real) {
-        take_back(p, map);
+        take_back(p, edits);
         return;
       }
       const float l = static_cast<float>(strength(kf.tracker, id, dist, p) * p.shares);
-      if (p.has_key) map.update(Key::unpack(p.key), l);
+      if (p.has_key) edits.push_back(MapEdit{p.key, l, false});
       p.added = l;
       set_believed(p, true);
     });
@@ -232,7 +232,7 @@ class BasicRobustModel {
     if (dist.count() == 0) return;  // the margin needs a scale
     crosses_.assign(kf.points.size(), 0);
     tally_.add_keyframe(
-        kf.map.grid(), kf.origin, kf.points, params_.margin_scale * dist.mean(),
+        kf.grid, kf.origin, kf.points, params_.margin_scale * dist.mean(),
         static_cast<std::uint32_t>(kf.index),
         [&](std::size_t j) { return kf.ids[j] != KeyframeUnion::kNoId; },
         [&](std::size_t j) { return Rules::witness_once ? index_[j] : MapPointLedger::kNone; },
@@ -263,7 +263,7 @@ class BasicRobustModel {
     if (!fresh) return self;
     MapPointLedger::Point& p = ledger_.at(self);
     Key k;  // as the scan finds the endpoint's voxel (float)
-    p.has_key = kf.map.grid().point_to_key(detail::to_point3f(p.position), k);
+    p.has_key = kf.grid.point_to_key(detail::to_point3f(p.position), k);
     if (p.has_key) {
       p.key = k.pack();
       p.voxel = tally_.slot(k);
@@ -303,18 +303,13 @@ class BasicRobustModel {
 
   // A point no longer believed takes its evidence back. A voxel left without a believed point is
   // not left occupied by what clamping kept of that evidence (or by an exact 0 where the point's
-  // evidence alone made it known): it is set just below the occupancy threshold.
-  template <class Key>
-  void take_back(MapPointLedger::Point& p, OccupancyMap<Key>& map) {
+  // evidence alone made it known): the edit sets it just below the occupancy threshold.
+  void take_back(MapPointLedger::Point& p, std::vector<MapEdit>& edits) {
     set_believed(p, false);
     const float added = p.added;
     p.added = 0.0f;
     if (!p.has_key || added == 0.0f) return;
-    const Key k = Key::unpack(p.key);
-    const float v = map.update(k, -added);
-    if (map.is_occupied(v) && tally_.at(p.voxel).believed == 0)
-      map.set(k, std::nextafter(map.params().occupancy_threshold,
-                                -std::numeric_limits<float>::infinity()));
+    edits.push_back(MapEdit{p.key, -added, tally_.at(p.voxel).believed == 0});
   }
 
   // Eq 13 for the point's s; from two detections on never below P_w (a point two keyframes agree
@@ -346,7 +341,7 @@ class BasicRobustModel {
     for (std::size_t j = 0; j < n; ++j) {
       Key k;
       if (kf.ids[j] == KeyframeUnion::kNoId ||
-          !kf.map.grid().point_to_key(detail::to_point3f(kf.points[j]), k))
+          !kf.grid.point_to_key(detail::to_point3f(kf.points[j]), k))
         continue;
       keys_[j] = k.pack();
       bool fresh = false;

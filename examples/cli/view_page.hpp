@@ -23,10 +23,10 @@
 
 #include <knnocc/insertion/voxel_colors.hpp>
 #include <knnocc/io/atomic_file.hpp>
+#include <knnocc/io/detail/sha256.hpp>
 #include <knnocc/io/error.hpp>
 #include <knnocc/map/occupancy_map.hpp>
 
-#include "sha256.hpp"
 #include "view_frame.hpp"
 #include "view_page_script.hpp"
 
@@ -179,7 +179,7 @@ inline std::string json_string(const std::string& s) {
 inline std::string content_security_policy(const std::vector<std::string>& scripts) {
   std::string sources;
   for (const std::string& s : scripts) {
-    const auto digest = sha256(s);
+    const auto digest = io::detail::sha256(s);
     sources += " 'sha256-" + base64(std::string(digest.begin(), digest.end())) + "'";
   }
   return "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; script-src" +

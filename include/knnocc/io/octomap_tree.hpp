@@ -32,6 +32,7 @@
 // are equal too, so that every voxel's colour reads back exactly.
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -103,16 +104,21 @@ void walk_octree_file(const std::string& path, const FileBuffer& buf, const Octr
 }
 
 // Writes one leaf of a read tree into the map: whole bricks (compacted) for leaves at depth 13
-// or coarser, single voxels below.
-inline void put_octree_leaf(OccupancyMap<OcKey>& map, int d, const NodeCorner& c, float value) {
-  using layout = BrickLayout<OcKey>;
+// or coarser, single voxels below. The map's key of OctoMap key k is k + shift.
+template <class Key>
+void put_octree_leaf(OccupancyMap<Key>& map, int d, const NodeCorner& c, float value,
+                     const std::array<std::int64_t, 3>& shift) {
+  using layout = BrickLayout<Key>;
+  using I = typename Key::index_type;
   const OccupancyParams& p = map.params();
   const float v = std::min(std::max(value, p.clamp_min), p.clamp_max);
   const std::uint32_t span = std::uint32_t{1} << (kOctreeDepth - d);
+  std::int64_t k0[3];
+  for (int a = 0; a < 3; ++a) k0[a] = std::int64_t{c.k[a]} + shift[a];
   if (span >= static_cast<std::uint32_t>(kBrickEdge)) {
     const std::int64_t bricks = span >> kBrickBits;
-    const std::int64_t b0[3] = {c.k[0] >> kBrickBits, c.k[1] >> kBrickBits, c.k[2] >> kBrickBits};
-    knnocc::detail::BrickWriter<OcKey> w(map);
+    const std::int64_t b0[3] = {k0[0] >> kBrickBits, k0[1] >> kBrickBits, k0[2] >> kBrickBits};
+    knnocc::detail::BrickWriter<Key> w(map);
     for (std::int64_t x = 0; x < bricks; ++x)
       for (std::int64_t y = 0; y < bricks; ++y)
         for (std::int64_t z = 0; z < bricks; ++z) {
@@ -125,8 +131,7 @@ inline void put_octree_leaf(OccupancyMap<OcKey>& map, int d, const NodeCorner& c
     for (std::uint32_t y = 0; y < span; ++y)
       for (std::uint32_t z = 0; z < span; ++z)
         map.set(
-            OcKey(static_cast<std::uint16_t>(c.k[0] + x), static_cast<std::uint16_t>(c.k[1] + y),
-                  static_cast<std::uint16_t>(c.k[2] + z)),
+            Key(static_cast<I>(k0[0] + x), static_cast<I>(k0[1] + y), static_cast<I>(k0[2] + z)),
             v);
 }
 
@@ -136,47 +141,121 @@ inline std::string format_resolution(double res) {  // std::ostream's default, a
   return text;
 }
 
+/// A node of an OctoMap tree as its parent sees it.
+struct OctreeNodeSummary {
+  bool leaf = false;         ///< the subtree collapsed into one leaf
+  float value = 0.0f;        ///< the leaf's value, or the max of the children
+  Rgb color{255, 255, 255};  ///< ColorOcTree: the leaf's colour, or the mean of the children's
+};
+
+/// One node of an OctoMap tree encoded apart (OctreeEncoder::encode_node): its bytes in the
+/// file's pre-order, as the whole file has them, and what its parent needs.
+struct OctreeNode {
+  bool present = false;     ///< false: the node holds no known voxel (no bytes, no node)
+  std::string data;         ///< the node's subtree, pre-order (.bt: empty for a leaf)
+  std::uint64_t nodes = 0;  ///< nodes of the subtree, the node itself included
+  OctreeNodeSummary summary;
+};
+
 // Builds OctoMap's node stream for a map (Full: .ot, else .bt; Color: ColorOcTree .ot); see the
-// file comment.
-template <bool Full, bool Color = false>
+// file comment. A map of keys wider than OctoMap's (WideKey) is written with `shift`: its key
+// k + shift is OctoMap's key k (each a multiple of 8, so bricks stay whole); its voxels must then
+// all lie within OctoMap's key range (check_fits_octree).
+template <bool Full, bool Color = false, class Key = OcKey>
 class OctreeEncoder {
   static_assert(Full || !Color, "ColorOcTree files are full (.ot) trees");
 
  public:
-  using Map = OccupancyMap<OcKey>;
-  using Brick = Map::Brick;
+  using Map = OccupancyMap<Key>;
+  using Brick = typename Map::Brick;
+  using Shift = std::array<std::int64_t, 3>;
+  static constexpr std::size_t kNodeBytes = Full ? (Color ? 8 : 5) : 2;
 
   /// `note`: the text of a "# knnocc <note>" header comment (made printable), or empty;
   /// `color_of`: the voxels' colours (ColorOcTree files only).
-  OctreeEncoder(const Map& map, const std::string& note, VoxelColorOf<OcKey> color_of = {})
-      : map_(map), note_(note), color_of_(std::move(color_of)) {}
+  OctreeEncoder(const Map& map, const std::string& note, VoxelColorOf<Key> color_of = {},
+                Shift shift = {0, 0, 0})
+      : map_(map), note_(note), color_of_(std::move(color_of)), shift_(shift) {}
 
   /// The whole file: header and node stream.
   std::string encode() {
-    const auto& bricks = knnocc::detail::brick_reader(map_).bricks();
-    order_.clear();
-    order_.reserve(bricks.size());
-    for (std::size_t i = 0; i < bricks.size(); ++i) {
-      if (!bricks[i].known.any()) continue;
-      const auto o = BrickLayout<OcKey>::origin_of(bricks[i].coord);
-      order_.push_back({morton(static_cast<std::uint32_t>(o[0] >> kBrickBits),
-                               static_cast<std::uint32_t>(o[1] >> kBrickBits),
-                               static_cast<std::uint32_t>(o[2] >> kBrickBits)),
-                        i});
-    }
-    std::sort(order_.begin(), order_.end(),
-              [](const Entry& a, const Entry& b) { return a.morton < b.morton; });
+    gather(0, {0, 0, 0});
     data_.clear();
     nodes_ = 0;
-    Summary root;
+    OctreeNodeSummary root;
     if (!order_.empty()) tree_node(0, 0, order_.size(), root);
-
-    std::string out = std::string(Full ? kOtFirstLine : kBtFirstLine) + "\n" + kOctreeComment +
-                      (note_.empty() ? "" : kNotePrefix + printable(note_) + "\n") + "id " +
-                      (Color ? "ColorOcTree" : "OcTree") + "\nsize " + std::to_string(nodes_) +
-                      "\nres " + format_resolution(map_.resolution()) + "\ndata\n";
+    std::string out = header(nodes_);
     out += data_;
     return out;
+  }
+
+  /// The header of a file of `nodes` nodes (what encode() writes before the node stream).
+  std::string header(std::uint64_t nodes) const {
+    return std::string(Full ? kOtFirstLine : kBtFirstLine) + "\n" + kOctreeComment +
+           (note_.empty() ? "" : kNotePrefix + printable(note_) + "\n") + "id " +
+           (Color ? "ColorOcTree" : "OcTree") + "\nsize " + std::to_string(nodes) + "\nres " +
+           format_resolution(map_.resolution()) + "\ndata\n";
+  }
+
+  /// The node of depth d (<= 13) whose lowest OctoMap key is `corner`, as the whole file holds it
+  /// (the voxels of the map outside the node are not looked at).
+  OctreeNode encode_node(int d, const std::array<std::uint32_t, 3>& corner) {
+    OctreeNode out;
+    gather(d, corner);
+    data_.clear();
+    nodes_ = 0;
+    if (!order_.empty()) out.present = tree_node(d, 0, order_.size(), out.summary);
+    out.data = std::move(data_);
+    data_.clear();
+    out.nodes = nodes_;
+    return out;
+  }
+
+  /// OctoMap's writers' rule for an inner node of depth d whose present children (bit i of
+  /// `present`) are `kids`: the node collapses into a leaf (true, `out` the leaf) when it is not
+  /// the root and its 8 children are leaves of one value (.ot; one colour too in a ColorOcTree)
+  /// or of one class (.bt); else (false) `out` is its summary and `head` receives its
+  /// kNodeBytes bytes.
+  bool combine(int d, const OctreeNodeSummary (&kids)[8], unsigned present, OctreeNodeSummary& out,
+               char* head) const {
+    bool collapse = d > 0 && present == 0xffu;
+    for (int i = 0; collapse && i < 8; ++i) collapse = kids[i].leaf && same(kids[i], kids[0]);
+    if (collapse) {
+      out = kids[0];
+      out.leaf = true;
+      return true;
+    }
+    float max = -std::numeric_limits<float>::infinity();
+    unsigned codes = 0;
+    for (int i = 0; i < 8; ++i) {
+      if (!((present >> i) & 1u)) continue;
+      max = std::max(max, kids[i].value);
+      const unsigned code = !kids[i].leaf ? 3u : occupied(kids[i].value) ? 2u : 1u;
+      codes |= code << (2 * i);
+    }
+    out.leaf = false;
+    out.value = max;
+    if (Color) out.color = mean_color(kids, present);
+    if constexpr (Full) {
+      node_data(head, out, present);
+    } else {
+      head[0] = static_cast<char>(codes & 0xffu);
+      head[1] = static_cast<char>(codes >> 8);
+    }
+    return false;
+  }
+
+  /// The bytes a leaf writes (.ot: its value and an empty child mask; .bt: none, its parent's
+  /// code tells it).
+  static std::string leaf_bytes(const OctreeNodeSummary& s) {
+    if constexpr (!Full) {
+      (void)s;
+      return {};
+    } else {
+      char bytes[kNodeBytes];
+      node_data(bytes, s, 0);
+      return std::string(bytes, kNodeBytes);
+    }
   }
 
  private:
@@ -186,14 +265,32 @@ class OctreeEncoder {
     std::uint64_t morton;
     std::size_t index;
   };
-  static constexpr std::size_t kNodeBytes = Full ? (Color ? 8 : 5) : 2;
   static constexpr Rgb kNoColor{255, 255, 255};  // ColorOcTreeNode's default: "not set"
 
-  struct Summary {
-    bool leaf = false;     // the subtree collapsed into one leaf
-    float value = 0.0f;    // the leaf's value, or the max of the children
-    Rgb color = kNoColor;  // ColorOcTree: the leaf's colour, or the mean of the children's
-  };
+  // The known bricks inside the depth-d node at OctoMap key `corner`, in Morton order.
+  void gather(int d, const std::array<std::uint32_t, 3>& corner) {
+    const auto& bricks = knnocc::detail::brick_reader(map_).bricks();
+    const std::int64_t span = std::int64_t{1} << (kOctreeDepth - d);
+    order_.clear();
+    order_.reserve(bricks.size());
+    for (std::size_t i = 0; i < bricks.size(); ++i) {
+      if (!bricks[i].known.any()) continue;
+      const auto o = BrickLayout<Key>::origin_of(bricks[i].coord);
+      std::int64_t k[3];
+      bool inside = true;
+      for (int a = 0; a < 3; ++a) {
+        k[a] = static_cast<std::int64_t>(o[a]) - shift_[a];
+        inside = inside && k[a] >= corner[a] && k[a] < corner[a] + span;
+      }
+      if (!inside) continue;
+      order_.push_back({morton(static_cast<std::uint32_t>(k[0] >> kBrickBits),
+                               static_cast<std::uint32_t>(k[1] >> kBrickBits),
+                               static_cast<std::uint32_t>(k[2] >> kBrickBits)),
+                        i});
+    }
+    std::sort(order_.begin(), order_.end(),
+              [](const Entry& a, const Entry& b) { return a.morton < b.morton; });
+  }
 
   // Child index bits x -> 1, y -> 2, z -> 4 at every level: a pre-order walk visits bricks in
   // increasing Morton order.
@@ -208,25 +305,25 @@ class OctreeEncoder {
   }
 
   bool occupied(float v) const { return map_.is_occupied(v); }
-  bool same(const Summary& a, const Summary& b) const {
+  bool same(const OctreeNodeSummary& a, const OctreeNodeSummary& b) const {
     if (!Full) return occupied(a.value) == occupied(b.value);
     return a.value == b.value && (!Color || a.color == b.color);
   }
 
   // Voxel i of brick b as a leaf: its value and, in a ColorOcTree, its colour when occupied.
-  Summary voxel(const Brick& b, int i) const {
-    Summary s;
+  OctreeNodeSummary voxel(const Brick& b, int i) const {
+    OctreeNodeSummary s;
     s.leaf = true;
     s.value = b.get(i);
     if constexpr (Color) {
       if (occupied(s.value))
-        s.color = color_of_(BrickLayout<OcKey>::key_of(b.coord, i)).value_or(kNoColor);
+        s.color = color_of_(BrickLayout<Key>::key_of(b.coord, i)).value_or(kNoColor);
     }
     return s;
   }
 
   // Writes a node's data with an empty child mask: a leaf.
-  void leaf(const Summary& s, Summary& out) {
+  void leaf(const OctreeNodeSummary& s, OctreeNodeSummary& out) {
     ++nodes_;
     if constexpr (Full) {
       char bytes[kNodeBytes];
@@ -237,7 +334,7 @@ class OctreeEncoder {
     out.leaf = true;
   }
 
-  static void node_data(char* at, const Summary& s, unsigned mask) {
+  static void node_data(char* at, const OctreeNodeSummary& s, unsigned mask) {
     store_le(at, s.value);
     if constexpr (Color) {
       at[4] = static_cast<char>(s.color.r);
@@ -249,7 +346,7 @@ class OctreeEncoder {
 
   // ColorOcTreeNode::getAverageChildColor: the integer mean of the children's colours other than
   // white; white when there are none.
-  static Rgb mean_color(const Summary (&kids)[8], unsigned present) {
+  static Rgb mean_color(const OctreeNodeSummary (&kids)[8], unsigned present) {
     unsigned sum[3] = {0, 0, 0}, n = 0;
     for (int i = 0; i < 8; ++i) {
       if (!((present >> i) & 1u) || kids[i].color == kNoColor) continue;
@@ -267,12 +364,12 @@ class OctreeEncoder {
   // child present nothing is emitted; with 8 equal leaves (OctoMap's pruning) the children's
   // bytes are dropped and the node becomes a leaf.
   template <class Child>
-  bool node(int d, Child&& child, Summary& out) {
+  bool node(int d, Child&& child, OctreeNodeSummary& out) {
     const std::size_t start = data_.size();
     const std::uint64_t nodes_before = nodes_;
     ++nodes_;
     data_.resize(start + kNodeBytes);
-    Summary kids[8];
+    OctreeNodeSummary kids[8];
     unsigned present = 0;
     for (int i = 0; i < 8; ++i) {
       if (child(i, kids[i])) present |= 1u << i;
@@ -282,44 +379,26 @@ class OctreeEncoder {
       nodes_ = nodes_before;
       return false;
     }
-    bool collapse = d > 0 && present == 0xffu;
-    for (int i = 0; collapse && i < 8; ++i) collapse = kids[i].leaf && same(kids[i], kids[0]);
-    if (collapse) {
+    OctreeNodeSummary combined;
+    if (combine(d, kids, present, combined, &data_[start])) {
       data_.resize(start);
       nodes_ = nodes_before;
-      leaf(kids[0], out);
+      leaf(combined, out);
       return true;
     }
-    float max = -std::numeric_limits<float>::infinity();
-    unsigned codes = 0;
-    for (int i = 0; i < 8; ++i) {
-      if (!((present >> i) & 1u)) continue;
-      max = std::max(max, kids[i].value);
-      const unsigned code = !kids[i].leaf ? 3u : occupied(kids[i].value) ? 2u : 1u;
-      codes |= code << (2 * i);
-    }
-    out.leaf = false;
-    out.value = max;
-    if (Color) out.color = mean_color(kids, present);
-    char* h = &data_[start];
-    if constexpr (Full) {
-      node_data(h, out, present);
-    } else {
-      h[0] = static_cast<char>(codes & 0xffu);
-      h[1] = static_cast<char>(codes >> 8);
-    }
+    out = combined;
     return true;
   }
 
   // Depth d < 13 over the bricks order_[lo, hi), which all lie in this node.
-  bool tree_node(int d, std::size_t lo, std::size_t hi, Summary& out) {
+  bool tree_node(int d, std::size_t lo, std::size_t hi, OctreeNodeSummary& out) {
     if (d == kBrickDepth)
       return brick_node(knnocc::detail::brick_reader(map_).bricks()[order_[lo].index], out);
     const int shift = 3 * (kBrickDepth - 1 - d);
     std::size_t cur = lo;
     return node(
         d,
-        [&](int i, Summary& s) {
+        [&](int i, OctreeNodeSummary& s) {
           std::size_t end = cur;
           while (end < hi && static_cast<int>((order_[end].morton >> shift) & 7u) == i) ++end;
           if (end == cur) return false;
@@ -330,9 +409,9 @@ class OctreeEncoder {
         out);
   }
 
-  bool brick_node(const Brick& b, Summary& out) {
+  bool brick_node(const Brick& b, OctreeNodeSummary& out) {
     if (b.known.count() == kBrickVoxels) {  // a whole known brick may be a single leaf
-      const Summary first = voxel(b, 0);
+      const OctreeNodeSummary first = voxel(b, 0);
       bool uniform = true;
       for (int i = 1; uniform && i < kBrickVoxels; ++i) uniform = same(voxel(b, i), first);
       if (uniform) {
@@ -343,7 +422,7 @@ class OctreeEncoder {
     return brick_sub(b, kBrickDepth, 0, 0, 0, out);
   }
 
-  bool brick_sub(const Brick& b, int d, int x, int y, int z, Summary& out) {
+  bool brick_sub(const Brick& b, int d, int x, int y, int z, OctreeNodeSummary& out) {
     if (d == kOctreeDepth) {
       const int i = x | (y << kBrickBits) | (z << (2 * kBrickBits));
       if (!b.known.test(i)) return false;
@@ -353,7 +432,7 @@ class OctreeEncoder {
     const int half = 1 << (kOctreeDepth - 1 - d);
     return node(
         d,
-        [&](int i, Summary& s) {
+        [&](int i, OctreeNodeSummary& s) {
           return brick_sub(b, d + 1, x + ((i & 1) ? half : 0), y + ((i & 2) ? half : 0),
                            z + ((i & 4) ? half : 0), s);
         },
@@ -362,7 +441,8 @@ class OctreeEncoder {
 
   const Map& map_;
   std::string note_;
-  VoxelColorOf<OcKey> color_of_;
+  VoxelColorOf<Key> color_of_;
+  Shift shift_;
   std::vector<Entry> order_;
   std::string data_;
   std::uint64_t nodes_ = 0;
@@ -406,14 +486,29 @@ inline OctreeInfo inspect_octree(const std::string& path, const OccupancyParams&
   return info;
 }
 
-/// Reads a .bt or .ot file (told apart by its first line) into a new map.
-inline OccupancyMap<OcKey> read_octree(const std::string& path,
-                                       const OctreeReadOptions& options = {}) {
-  const detail::FileBuffer buf = detail::read_file(path);
+template <class Key>
+OccupancyMap<Key> read_octree_bytes(const std::string& path, const detail::FileBuffer& buf,
+                                    const OctreeReadOptions& options,
+                                    const std::array<std::int64_t, 3>& shift);
+
+/// Reads a .bt or .ot file (told apart by its first line) into a new map of keys `Key`, the
+/// file's OctoMap key k becoming the map's key k + shift (a tile of a wide map,
+/// tiles/tile_files.hpp; shift 0 for OcKey). The file's leaves must land in the key range.
+template <class Key>
+OccupancyMap<Key> read_octree_shifted(const std::string& path, const OctreeReadOptions& options,
+                                      const std::array<std::int64_t, 3>& shift) {
+  return read_octree_bytes<Key>(path, detail::read_file(path), options, shift);
+}
+
+/// The same from the file's bytes, read already (`path` names it in errors).
+template <class Key>
+OccupancyMap<Key> read_octree_bytes(const std::string& path, const detail::FileBuffer& buf,
+                                    const OctreeReadOptions& options,
+                                    const std::array<std::int64_t, 3>& shift) {
   // Pass 1 validates everything and sizes the expansion before anything is allocated.
   const detail::OctreeHeader h = detail::parse_octree_header(path, buf.data(), buf.size());
   std::uint64_t voxels = 0;
-  detail::walk_octree_file(path, buf, h, [&](int d, const detail::NodeCorner&, float, bool) {
+  detail::walk_octree_file(path, buf, h, [&](int d, const detail::NodeCorner& c, float, bool) {
     voxels += detail::voxels_in_node(d);
     if (voxels > options.max_voxels) {
       throw Error(path, "the tree's leaves cover more than " + std::to_string(options.max_voxels) +
@@ -422,8 +517,14 @@ inline OccupancyMap<OcKey> read_octree(const std::string& path,
                             std::to_string(d) + " alone covers " +
                             std::to_string(detail::voxels_in_node(d)));
     }
+    for (int a = 0; a < 3; ++a) {
+      const std::int64_t k = std::int64_t{c.k[a]} + shift[a];
+      if (k < 0 || k + (std::int64_t{1} << (detail::kOctreeDepth - d)) > Key::extent)
+        throw Error(path, "a leaf lies outside the key range of a " + std::to_string(Key::depth) +
+                              "-bit map at this file's offset");
+    }
   });
-  using Brick = OccupancyMap<OcKey>::Brick;
+  using Brick = typename OccupancyMap<Key>::Brick;
   const std::uint64_t bricks = (voxels + kBrickVoxels - 1) / kBrickVoxels;
   const double at_least = static_cast<double>(bricks) * (sizeof(Brick) + 24);
   if (options.memory_limit && at_least > static_cast<double>(options.memory_limit)) {
@@ -432,15 +533,21 @@ inline OccupancyMap<OcKey> read_octree(const std::string& path,
                           " MB as a map, more than its memory limit of " +
                           std::to_string(options.memory_limit / 1000000) + " MB");
   }
-  OccupancyMap<OcKey> map(h.resolution, options.params);
+  OccupancyMap<Key> map(h.resolution, options.params);
   map.set_memory_limit(options.memory_limit);
   const OccupancyParams& p = map.params();
   detail::walk_octree_file(path, buf, h,
                            [&](int d, const detail::NodeCorner& c, float v, bool occupied_code) {
                              if (h.binary) v = occupied_code ? p.clamp_max : p.clamp_min;
-                             detail::put_octree_leaf(map, d, c, v);
+                             detail::put_octree_leaf(map, d, c, v, shift);
                            });
   return map;
+}
+
+/// Reads a .bt or .ot file (told apart by its first line) into a new map.
+inline OccupancyMap<OcKey> read_octree(const std::string& path,
+                                       const OctreeReadOptions& options = {}) {
+  return read_octree_shifted<OcKey>(path, options, {0, 0, 0});
 }
 
 /// The bytes of `map` as liboctomap's OcTree::writeBinary would write them (.bt). A `note` adds

@@ -238,7 +238,8 @@ class VoxelTally {
     if (scratch_.ends.empty()) return true;
     detail::ScanBitmap& seen = scratch_.seen;
     seen.reshape(box->lo, box->size, false);
-    const std::int32_t kof[3] = {ko[0], ko[1], ko[2]};
+    const std::int32_t kof[3] = {static_cast<std::int32_t>(ko[0]), static_cast<std::int32_t>(ko[1]),
+                                 static_cast<std::int32_t>(ko[2])};
     const detail::RayFan fan(grid, o, kof, box->lo,
                              {seen.stride(0), seen.stride(1), seen.stride(2)});
     if (!scratch_.block) scratch_.block = std::make_unique<detail::RayBlock>();
@@ -276,7 +277,10 @@ class VoxelTally {
         hi[a] = std::max<std::int64_t>(hi[a], ke[a]);
         steps += static_cast<std::size_t>(std::llabs(std::int64_t{ke[a]} - ko[a]));
       }
-      scratch_.ends.push_back(detail::RayEnd{stops_[i].end, {ke[0], ke[1], ke[2]}});
+      scratch_.ends.push_back(
+          detail::RayEnd{stops_[i].end,
+                         {static_cast<std::int32_t>(ke[0]), static_cast<std::int32_t>(ke[1]),
+                          static_cast<std::int32_t>(ke[2])}});
       scratch_.stop_of.push_back(static_cast<std::uint32_t>(i));
     }
     Box box;

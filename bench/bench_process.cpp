@@ -35,44 +35,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using knnocc::bench::Child;
 using knnocc::bench::now;
+using knnocc::bench::run_process;
 using knnocc::bench::scan_dat;
-
-struct Child {
-  double seconds = 0;
-  double peak_mb = 0;
-  int status = -1;
-  std::string output;
-};
-
-// Runs argv as a child process; wall time from fork to exit, the child's peak RSS.
-Child run_process(const std::vector<std::string>& args) {
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  int pipefd[2];
-  if (pipe(pipefd) != 0) std::exit(2);
-  Child c;
-  const double t0 = now();
-  const pid_t pid = fork();
-  if (pid == 0) {
-    dup2(pipefd[1], 1);
-    close(pipefd[0]);
-    close(pipefd[1]);
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
-  close(pipefd[1]);
-  char buf[4096];
-  for (ssize_t n; (n = read(pipefd[0], buf, sizeof buf)) > 0;) c.output.append(buf, std::size_t(n));
-  close(pipefd[0]);
-  struct rusage ru {};
-  wait4(pid, &c.status, 0, &ru);
-  c.seconds = now() - t0;
-  c.peak_mb = ru.ru_maxrss / 1024.0;
-  while (!c.output.empty() && c.output.back() == '\n') c.output.pop_back();
-  return c;
-}
 
 #if KNNOCC_HAVE_OCTOMAP
 // liboctomap's insertPointCloud alone (the point cloud is built before the clock starts).

@@ -509,3 +509,54 @@ TEST_CASE("octomap_tree.memory_limit refuses a file whose leaves surely do not f
   o.memory_limit = 4 * map.memory_usage() + (std::size_t{1} << 20);
   CHECK(io::encode_bt(io::read_octree(small, o)) == io::encode_bt(map));
 }
+
+TEST_CASE("octree: a node encoded apart is the whole file's; counting a .bt node is encoding it") {
+  // Bricks whole and partly known, uniform and mixed, around value ties at the threshold, so
+  // every pruning case occurs: encode_node(0) is encode()'s node stream, the nodes of every depth
+  // are the whole tree's, and the .bt count from masks (bytes = false) equals the encoding.
+  std::mt19937 rng(29);
+  std::uniform_int_distribution<int> cell(32700, 32840), pick(0, 9);
+  OccupancyMap<OcKey> map(0.1);
+  for (int i = 0; i < 60000; ++i) {
+    const OcKey k(static_cast<std::uint16_t>(cell(rng)), static_cast<std::uint16_t>(cell(rng)),
+                  static_cast<std::uint16_t>(cell(rng) / 4 + 24560));
+    const int p = pick(rng);
+    map.set(k, p < 4 ? -1.0f : p < 8 ? 1.5f : p == 8 ? 0.0f : -0.25f);
+  }
+  for (int x = 32768; x < 32800; ++x)  // whole uniform bricks and uniform 2x2x2 blocks
+    for (int y = 32768; y < 32784; ++y)
+      for (int z = 32768; z < 32776; ++z)
+        map.set(OcKey(static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y),
+                      static_cast<std::uint16_t>(z)),
+                x < 32784 ? -2.0f
+                : (z & 2) ? 3.5f
+                          : 1.0f);
+  io::detail::OctreeEncoder<false> bt(map, "");
+  io::detail::OctreeEncoder<true> ot(map, "");
+  const std::string whole_bt = io::encode_bt(map), whole_ot = io::encode_ot(map);
+  const io::detail::OctreeNode root_bt = bt.encode_node(0, {0, 0, 0});
+  const io::detail::OctreeNode root_ot = ot.encode_node(0, {0, 0, 0});
+  CHECK(whole_bt == bt.header(root_bt.nodes) + root_bt.data);
+  CHECK(whole_ot == ot.header(root_ot.nodes) + root_ot.data);
+  std::size_t nodes = 0, leaves = 0;
+  for (const int d : {1, 5, 9, 11, 12, 13}) {
+    const std::uint32_t span = 1u << (16 - d);
+    for (std::uint32_t x = 32768 - 4 * span; x < 32768 + 4 * span; x += span)
+      for (std::uint32_t y = 32768 - 4 * span; y < 32768 + 4 * span; y += span)
+        for (std::uint32_t z = 32768 - 4 * span; z < 32768 + 4 * span; z += span) {
+          if (x > 65535 || y > 65535 || z > 65535) continue;
+          const std::array<std::uint32_t, 3> corner{x, y, z};
+          const io::detail::OctreeNode a = bt.encode_node(d, corner);
+          const io::detail::OctreeNode b = bt.encode_node(d, corner, false);
+          CHECK(a.present == b.present);
+          CHECK(a.nodes == b.nodes);
+          CHECK(a.summary.leaf == b.summary.leaf);
+          CHECK(std::memcmp(&a.summary.value, &b.summary.value, sizeof(float)) == 0);
+          CHECK(b.data.empty());
+          nodes += a.nodes;
+          leaves += a.present && a.summary.leaf;
+        }
+  }
+  CHECK(nodes > 10000);
+  CHECK(leaves >= 4);  // collapsed nodes at some depth
+}

@@ -54,9 +54,10 @@ std::string tree_sequence() {
 
 // The run in one process and in tiles at `depth`; the merged files must be the one-process ones.
 template <class Key, class Model>
-void check_run(const std::string& seq, const Model& model, double res, int depth,
-               double crop = 4.0) {
+void check_run(const std::string& seq, const Model& model, double res, int depth, double crop = 4.0,
+               std::size_t memory_limit = 0) {
   CAPTURE(depth);
+  CAPTURE(memory_limit);
   const io::ScanSource source = io::ScanSource::open(seq);
   auto prepare = [crop](io::Scan& s, std::size_t) {
     std::vector<Point3f> kept;
@@ -89,9 +90,10 @@ void check_run(const std::string& seq, const Model& model, double res, int depth
   CHECK(rater.map().empty());  // the rating pass never touches a map
   const tiles::RatedStore store = tiles::RatedStore::open((root / "rated").string());
   CHECK(store.size() == source.size());
-  const tiles::TileSetIndex ix =
-      tiles::write_tile_set<Key>(store, (root / "tiles").string(), depth, {"test", "", seq, 0, 20});
+  const tiles::TileSetIndex ix = tiles::write_tile_set<Key>(
+      store, (root / "tiles").string(), depth, {"test", "", seq, 0, 20}, 1, memory_limit);
   CHECK(ix.occupied() + ix.free() == direct.map().num_voxels());
+  if (memory_limit) CHECK(direct.map().memory_usage() > 2 * memory_limit);  // groups were split
   const std::string bt = (root / "m.bt").string(), ot = (root / "m.ot").string();
   tiles::merge_tile_set((root / "tiles").string(), bt, true);
   tiles::merge_tile_set((root / "tiles").string(), ot, false);
@@ -125,6 +127,10 @@ TEST_CASE(
   }
   check_run<WideKey>(seq, RobustModel{}, 0.05, 11);
   check_run<WideKey>(seq, OctoMapModel{}, 0.05, 1);
+  // Under a memory limit the tiles are mapped in smaller and smaller groups down to single tiles:
+  // the same files.
+  check_run<OcKey>(seq, OctoMapModel{}, 0.05, 11, 4.0, std::size_t{1} << 20);
+  check_run<OcKey>(seq, RobustModel{}, 0.05, 12, 4.0, std::size_t{3} << 18);
 }
 
 TEST_CASE("tile mapping: a rated keyframe file reads back exactly; a damaged one is refused") {

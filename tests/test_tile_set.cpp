@@ -28,6 +28,19 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// The scratch folder of the running test case (ctest runs the cases as parallel processes), and
+// its removal when the case ends.
+std::string& scratch_root() {
+  static std::string root;
+  return root;
+}
+struct Cleanup {
+  explicit Cleanup(const std::string& name) {
+    scratch_root() = test::scratch_dir("tile_set_" + name).string();
+  }
+  ~Cleanup() { fs::remove_all(scratch_root()); }
+};
+
 // A few scans of scattered and clustered points around two origins, so the map has free space,
 // occupied voxels and pruned (uniform) regions across several tiles.
 template <class Key>
@@ -52,7 +65,7 @@ OccupancyMap<Key> sample_map(double res, Point3f shift = {0, 0, 0}) {
 // `map` cut into tiles at `depth` into a fresh folder; returns the folder.
 template <class Key>
 std::string write_tiles(const OccupancyMap<Key>& map, int depth, const std::string& name) {
-  const fs::path dir = test::scratch_dir("tile_set") / name;
+  const fs::path dir = fs::path(scratch_root()) / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   const TileGrid<Key> grid(depth);
@@ -67,11 +80,6 @@ std::string write_tiles(const OccupancyMap<Key>& map, int depth, const std::stri
   return dir.string();
 }
 
-// Removes the scratch folders of a test case when it ends.
-struct Cleanup {
-  ~Cleanup() { fs::remove_all(test::scratch_dir("tile_set")); }
-};
-
 std::string merged(const std::string& dir, bool binary) {
   const std::string out = dir + (binary ? ".merged.bt" : ".merged.ot");
   tiles::merge_tile_set(dir, out, binary);
@@ -81,7 +89,7 @@ std::string merged(const std::string& dir, bool binary) {
 }  // namespace
 
 TEST_CASE("tile set: cut at any depth and merged, the map's own .bt and .ot bytes") {
-  const Cleanup cleanup;
+  const Cleanup cleanup("cut");
   const OccupancyMap<OcKey> map = sample_map<OcKey>(0.1);
   const std::string bt = io::encode_bt(map), ot = io::encode_ot(map);
   std::mt19937 rng(11);
@@ -105,7 +113,7 @@ TEST_CASE("tile set: cut at any depth and merged, the map's own .bt and .ot byte
 }
 
 TEST_CASE("tile set: a tile's file is the OctoMap file of that tile alone") {
-  const Cleanup cleanup;
+  const Cleanup cleanup("alone");
   const OccupancyMap<OcKey> map = sample_map<OcKey>(0.1);
   const int depth = 10;
   const std::string dir = write_tiles(map, depth, "alone");
@@ -121,7 +129,7 @@ TEST_CASE("tile set: a tile's file is the OctoMap file of that tile alone") {
 }
 
 TEST_CASE("tile set: wide keys inside OctoMap's range merge to the 16-bit map's files") {
-  const Cleanup cleanup;
+  const Cleanup cleanup("wide");
   const OccupancyMap<OcKey> narrow = sample_map<OcKey>(0.1, {-1500.0f, 2200.0f, -3.0f});
   const OccupancyMap<WideKey> wide = sample_map<WideKey>(0.1, {-1500.0f, 2200.0f, -3.0f});
   for (const int depth : {1, 6, 12}) {
@@ -137,7 +145,7 @@ TEST_CASE("tile set: wide keys inside OctoMap's range merge to the 16-bit map's 
 }
 
 TEST_CASE("tile set: wide keys beyond OctoMap's range are kept as tiles, merging is refused") {
-  const Cleanup cleanup;
+  const Cleanup cleanup("far");
   const OccupancyMap<WideKey> wide = sample_map<WideKey>(0.1, {5000.0f, -7000.0f, 0.0f});
   const std::string dir = write_tiles(wide, 8, "far");
   const tiles::TileSetIndex ix = tiles::read_index(dir);
@@ -156,7 +164,7 @@ TEST_CASE("tile set: wide keys beyond OctoMap's range are kept as tiles, merging
 }
 
 TEST_CASE("tile set: a damaged tile set is one io::Error naming the file, nothing written") {
-  const Cleanup cleanup;
+  const Cleanup cleanup("damaged");
   const OccupancyMap<OcKey> map = sample_map<OcKey>(0.1);
   const OccupancyMap<OcKey> coarse = sample_map<OcKey>(0.2);
   struct Damage {

@@ -18,6 +18,8 @@ const std::vector<Command>& commands() {
       {room_demo_spec, run_room_demo, "room"},
       {loop_demo_spec, run_loop_demo, "loop"},
       {map_spec, run_map, ""},
+      {merge_spec, run_merge, ""},
+      {tile_spec, run_tile, ""},
       {track_spec, run_track, ""},
       {sim_spec, run_sim, ""},
       {eval_spec, run_eval, ""},

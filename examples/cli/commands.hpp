@@ -34,6 +34,10 @@ std::string cli_markdown();
 // The commands (each in its <name>_command.cpp).
 const CommandSpec& map_spec();
 int run_map(const Args& args);
+const CommandSpec& merge_spec();
+int run_merge(const Args& args);
+const CommandSpec& tile_spec();
+int run_tile(const Args& args);
 const CommandSpec& demo_spec();
 int run_demo(const Args& args);
 const CommandSpec& room_demo_spec();

@@ -17,6 +17,7 @@
 #include <knnocc/io/voxel_export.hpp>
 #include <knnocc/io/voxel_list.hpp>
 #include <knnocc/io/xyz.hpp>
+#include <knnocc/tiles/tile_merge.hpp>
 
 #include "args.hpp"
 #include "commands.hpp"
@@ -27,6 +28,7 @@
 #include "output_set.hpp"
 #include "progress.hpp"
 #include "resource_limits.hpp"
+#include "tile_set_files.hpp"
 
 namespace knnocc::cli {
 
@@ -40,7 +42,10 @@ CommandSpec make_convert_spec() {
   s.text = R"(Converts a map or a point cloud; the formats follow from the file extensions.
 maps:
   IN   .bt .ot (OctoMap trees), or a voxel list (x y z logodds per line, as --out-voxels
-       writes) named .voxels or given with --voxel-list, which needs --res
+       writes) named .voxels or given with --voxel-list, which needs --res, or a tile set
+       folder (knnocc map --out-tiles): .bt/.ot OUT is streamed as knnocc merge writes it;
+       the other formats read it tile by tile (free voxels when --voxels or the format needs
+       them and they fit --memory-limit; beyond OctoMap's key range at a coarser resolution)
   OUT  .bt .ot             OctoMap trees (knnocc convert a.bt b.bt rewrites a.bt byte for byte)
        .voxels .txt        voxel list, sorted by x, y, z (--voxels, default all)
        .ply                voxels as points (colour = height, property logodds) or cubes
@@ -90,7 +95,7 @@ namespace {
 /// What `convert` was asked to do, checked before any work.
 struct ConvertJob {
   std::string in, out, in_ext, out_ext, encoding, which;
-  bool voxel_list_in = false, map_in = false;
+  bool voxel_list_in = false, map_in = false, tile_set_in = false;
 
   io::VoxelSelection selection(const char* fallback, bool ply_free) const {
     if (ply_free) return io::VoxelSelection::all;
@@ -120,7 +125,8 @@ ConvertJob convert_job(const Args& args) {
     throw UsageError("--encoding binary_compressed is for .pcd output only");
   j.which = args.str("--voxels");
   j.voxel_list_in = j.in_ext == ".voxels" || args.flag("--voxel-list");
-  j.map_in = j.voxel_list_in || is_tree_file(j.in);
+  j.tile_set_in = is_tile_set_path(j.in);
+  j.map_in = j.voxel_list_in || is_tree_file(j.in) || j.tile_set_in;
   if (j.voxel_list_in && !args.has("--res")) throw UsageError("a voxel-list input needs --res");
   if (!j.voxel_list_in && args.has("--res"))
     throw UsageError("--res only applies to a voxel-list input");
@@ -259,10 +265,33 @@ int convert_cloud(const ConvertJob& j) {
 
 }  // namespace
 
+/// A tile set into OUT: an OctoMap file streamed as knnocc merge writes it, the other formats
+/// from the tiles read into one map (the voxels OUT shows).
+int convert_tile_set(const ConvertJob& j, const Args& args) {
+  if (j.out_ext == ".bt" || j.out_ext == ".ot") {
+    const tiles::MergeStats st = reading(j.in, [&] {
+      return tiles::merge_tile_set(j.in, j.out, j.out_ext == ".bt",
+                                   map_memory_share(memory_limit_bytes()));
+    });
+    std::printf("tile set %zu tiles\nwrote %s: the whole map as an OctoMap tree (%llu nodes)\n",
+                st.tiles, j.out.c_str(), static_cast<unsigned long long>(st.nodes));
+    return 0;
+  }
+  const bool free_too = j.out_ext == ".yaml" || args.flag("--ply-free") || j.which == "free" ||
+                        j.which == "all" || (j.which.empty() && j.out_ext == ".voxels") ||
+                        (j.which.empty() && j.out_ext == ".txt");
+  const OccupancyMap<OcKey> map = read_tile_set_map(j.in, free_too, "convert");
+  const auto c = map.count_voxels();
+  std::printf("map %zu voxels (occupied %zu, free %zu)\n", c.known(), c.occupied, c.free);
+  write_converted_map(map, j, args);
+  return 0;
+}
+
 int run_convert(const Args& args) {
   const ConvertJob j = convert_job(args);
   use_memory_limit(args);
   if (!j.map_in) return convert_cloud(j);
+  if (j.tile_set_in) return convert_tile_set(j, args);
   const OccupancyMap<OcKey> map =
       j.voxel_list_in
           ? reading(j.in, [&] { return read_voxel_list_map(j.in, args.number("--res")); })

@@ -11,6 +11,7 @@
 #include <knnocc/io/ply.hpp>
 #include <knnocc/io/point_file.hpp>
 #include <knnocc/io/scan_source.hpp>
+#include <knnocc/tiles/tile_set.hpp>
 
 #include "args.hpp"
 #include "commands.hpp"
@@ -26,7 +27,7 @@ namespace {
 CommandSpec make_info_spec() {
   CommandSpec s;
   s.name = "info";
-  s.summary = "what a map (.bt/.ot), cloud, scan graph or sequence folder holds";
+  s.summary = "what a map (.bt/.ot), tile set, cloud, scan graph or sequence folder holds";
   s.usage = "knnocc info PATH";
   s.text = R"(Prints what PATH holds, one "key: value" line each:
   .bt / .ot             OctoMap tree: type, resolution, nodes, leaves (occupied / free, depths),
@@ -36,6 +37,9 @@ CommandSpec make_info_spec() {
                         PCD: fields, encoding, viewpoint
   .graph                OctoMap scan graph: scans, points, edges, box of the world-frame points
   a sequence folder     clouds and poses (every cloud is read), box of the world-frame points
+  a tile set folder     knnocc map --out-tiles / knnocc tile: resolution, key bits, tile depth and
+                        edge, model, clouds, tiles, voxels, bounds of the tiles; every tile is
+                        checked (size, SHA-256, resolution, voxels inside its tile)
 )";
   s.groups.push_back({"options", {memory_limit_option()}, ""});
   s.footer =
@@ -136,6 +140,53 @@ int info_point_file(const std::string& path, const io::ScanSource& source) {
   return 0;
 }
 
+// A tile set: its index, and every tile read and checked against it.
+int info_tile_set(const std::string& dir) {
+  const tiles::TileSetIndex ix = tiles::read_index(dir);
+  std::printf("format: knnocc tile set (%s)\n", tiles::kIndexName);
+  std::printf("resolution: %g\n", ix.resolution);
+  std::printf("key bits: %d\n", ix.key_bits);
+  std::printf("tile depth: %d (edge %lld voxels, %g m)\n", ix.tile_depth,
+              static_cast<long long>(ix.tile_edge()), double(ix.tile_edge()) * ix.resolution);
+  std::printf("model: %s%s%s\n", io::printable(ix.model).c_str(),
+              ix.model_options.empty() ? "" : " ", io::printable(ix.model_options).c_str());
+  if (!ix.source.empty())
+    std::printf("source: %s (clouds %llu to %llu)\n", io::printable(ix.source).c_str(),
+                static_cast<unsigned long long>(ix.first),
+                static_cast<unsigned long long>(ix.first + ix.count - (ix.count > 0)));
+  std::printf("tiles: %zu\n", ix.tiles.size());
+  std::printf("finest voxels: %llu (occupied %llu, free %llu)\n",
+              static_cast<unsigned long long>(ix.occupied() + ix.free()),
+              static_cast<unsigned long long>(ix.occupied()),
+              static_cast<unsigned long long>(ix.free()));
+  std::uint64_t bytes = 0;
+  const std::int64_t center = ix.key_bits == 16 ? OcKey::center : WideKey::center;
+  double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+  Progress progress("info", ix.tiles.size());
+  for (std::size_t i = 0; i < ix.tiles.size(); ++i) {
+    const tiles::TileEntry& t = ix.tiles[i];
+    bytes += t.bytes;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const double l = double(t.keys[a] - center) * ix.resolution,
+                   h = double(t.keys[a + 3] + 1 - center) * ix.resolution;
+      lo[a] = i == 0 ? l : std::min(lo[a], l);
+      hi[a] = i == 0 ? h : std::max(hi[a], h);
+    }
+    if (ix.key_bits == 16)
+      (void)tiles::read_tile<OcKey>(dir, ix, t);
+    else
+      (void)tiles::read_tile<WideKey>(dir, ix, t);
+    progress.update(i + 1);
+  }
+  progress.finish();
+  std::printf("files: %llu bytes\n", static_cast<unsigned long long>(bytes));
+  if (!ix.tiles.empty())
+    std::printf("bounds of the tiles: x [%.3f, %.3f] y [%.3f, %.3f] z [%.3f, %.3f]\n", lo[0], hi[0],
+                lo[1], hi[1], lo[2], hi[2]);
+  std::printf("checked: every tile matches the index\n");
+  return 0;
+}
+
 // A scan graph or a sequence folder: every scan, in the world frame.
 int info_scans(const io::ScanSource& source) {
   detail::Box box, sensors;
@@ -173,6 +224,7 @@ int run_info(const Args& args) {
   std::printf("file: %s\n", path.c_str());
   return reading(path, [&] {
     if (is_tree_file(path)) return info_tree(path);
+    if (tiles::is_tile_set(path)) return info_tile_set(path);
     const io::ScanSource source = io::ScanSource::open(path);
     if (std::string(source.kind()) == "point file") return info_point_file(path, source);
     return info_scans(source);

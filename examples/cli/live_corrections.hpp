@@ -77,8 +77,9 @@ void report_corrections(const Live& live, const Model& model, const MapRun& run,
   const auto& map = live.map();
   const ScanStats skipped = live.point_counts();  // at the final poses, as plain `map` counts
   const std::string& input = run.input().path;
-  note_skipped_points(input, skipped.nonfinite, skipped.out_of_range, map.grid().max_coord());
-  note_empty_map(input, clouds, run.points(), map, model);
+  note_skipped_points(input, skipped.nonfinite, skipped.out_of_range, map.grid().max_coord(),
+                      map.grid().resolution());
+  note_empty_map(input, clouds, run.points(), map.count_voxels().known(), model);
   if constexpr (Live::uses_map_cloud) {
     const auto& tr = live.tracker();
     std::printf("knn k %zu map_points %zu valid %zu mu %.6f sigma %.6f\n", tr.params().k, tr.size(),

@@ -20,9 +20,11 @@
 #include "common_options.hpp"
 #include "input_guard.hpp"
 #include "live_corrections.hpp"
+#include "map_options.hpp"
 #include "map_outputs.hpp"
 #include "map_run.hpp"
 #include "map_snapshots.hpp"
+#include "map_tiles.hpp"
 #include "output_set.hpp"
 #include "progress.hpp"
 #include "resource_limits.hpp"
@@ -98,6 +100,11 @@ const char* kKnn2022Text =
   Defaults: docs/results.md (build/bin/bench_knn_sweep --model knn2022).
 )";
 
+const char* kMapFooter =
+    "Outputs are never inputs: an output that is an input file (links count) or lies inside an\n"
+    "input folder (the sequence, --corrections DIR) is refused before any work.\n"
+    "exit status: 0 success, 2 bad input (one line on stderr naming the file and the problem).\n";
+
 bool nonzero(double v) { return v != 0.0; }
 
 CommandSpec make_map_spec() {
@@ -164,6 +171,7 @@ CommandSpec make_map_spec() {
                      "of poses.txt's (docs/live_mapping.md)")},
        ""});
   s.groups.push_back(map_output_group());
+  s.groups.push_back(map_tiles_group());
   s.groups.push_back(octomap_model_group());
   s.groups.push_back(knn_model_group("k-NN model (--model knn)", kKnnText));
   s.groups.push_back(knn2022_model_group(kKnn2022Text));
@@ -175,11 +183,7 @@ CommandSpec make_map_spec() {
                            .at_least(0)
                            .at_most(100)},
                       kRobustText});
-  s.footer =
-      "Outputs are never inputs: an output that is an input file (links count) or lies inside an\n"
-      "input folder (the sequence, --corrections DIR) is refused before any work.\n"
-      "exit status: 0 success, 2 bad input (one line on stderr naming the file and the "
-      "problem).\n";
+  s.footer = kMapFooter;
   return s;
 }
 
@@ -191,45 +195,6 @@ const CommandSpec& map_spec() {
 }
 
 namespace {
-
-struct MapOptions {
-  std::string input, which, init_map;
-  double res = 0, max_range = -1, crop = -1, memory_limit = 0;
-  bool discretize = false;
-  unsigned threads = 1;
-  std::size_t first = 0, count = static_cast<std::size_t>(-1), save_every = 0;
-  MapInput scans;             ///< how scans are read (points frame, crop, colours)
-  OccupancyParams occupancy;  ///< --clamp
-  std::vector<MapFile> files;
-  std::optional<std::pair<double, double>> grid_band;  ///< --grid-z
-};
-
-/// The file an error in scan i is about: the cloud of a sequence, else the input itself.
-std::string source_path_for_errors(const std::string& input, std::size_t i) {
-  if (io::is_sequence_dir(input)) {
-    try {
-      return io::Sequence::open(input).cloud_path(i);
-    } catch (const std::exception&) {
-    }
-  }
-  return input + (i > 0 ? " (scan " + std::to_string(i) + ")" : "");
-}
-
-/// What a run inserted, for the summary lines.
-struct MapTotals {
-  ScanStats scan;
-  std::size_t clouds = 0, rays = 0, rated = 0;
-  std::vector<double> keyframe_ms;
-
-  void add(const KeyframeStats& ks) {
-    scan.points += ks.scan.points;
-    scan.nonfinite += ks.scan.nonfinite;
-    scan.out_of_range += ks.scan.out_of_range;
-    rays += ks.rays;
-    rated += ks.rated;
-    ++clouds;
-  }
-};
 
 /// The map's share of --memory-limit, and the refusal of work that cannot fit in it, naming the
 /// limit and what to change.
@@ -319,41 +284,16 @@ KeyframeStats insert_scan(Mapper<Model>& mapper, io::Scan& scan, std::size_t i,
   }
 }
 
-/// The notes on skipped points and an empty map, the k-NN line and the summary line.
+/// The notes on skipped points and an empty map, the model's line and the summary line.
 template <class Model>
 void report_map(const Mapper<Model>& mapper, const Model& model, const MapOptions& opt,
                 MapTotals& totals, std::chrono::steady_clock::time_point t0) {
   const auto& map = mapper.map();
   const ScanStats& total = totals.scan;
-  note_skipped_points(opt.input, total.nonfinite, total.out_of_range, map.grid().max_coord());
-  note_empty_map(opt.input, totals.clouds, total.points, map, model);
-  if constexpr (Mapper<Model>::uses_map_cloud) {
-    const auto& tr = mapper.tracker();
-    // Dense input (depth camera, LiDAR): the paper's s-rating removes far, sparser surfaces.
-    const std::size_t per_cloud = totals.clouds ? total.points / totals.clouds : 0;
-    if constexpr (!Mapper<Model>::contextual)
-      if (totals.clouds > 0 && tr.N() > 0 && (tr.mu() < 0.5 * opt.res || per_cloud > 20000))
-        std::fprintf(stderr,
-                     "knnocc map: %s: warning: dense input (mean k-NN distance %.3g m at --res %g, "
-                     "%zu points per cloud): the k-NN model removes far, sparser surfaces of "
-                     "dense clouds; --model octomap (or robust) keeps them\n",
-                     opt.input.c_str(), tr.mu(), opt.res, per_cloud);
-    std::vector<double>& ms = totals.keyframe_ms;
-    std::sort(ms.begin(), ms.end());
-    std::printf(
-        "knn k %zu map_points %zu valid %zu mu %.6f sigma %.6f rays %zu of %zu "
-        "median_keyframe_ms %.3f\n",
-        tr.params().k, tr.size(), tr.N(), tr.mu(), tr.sigma(), totals.rays, totals.rated,
-        ms.empty() ? 0.0 : ms[ms.size() / 2]);
-  } else if constexpr (Mapper<Model>::rates_cloud) {
-    const Knn2022Model& m = mapper.model();
-    std::vector<double>& ms = totals.keyframe_ms;
-    std::sort(ms.begin(), ms.end());
-    std::printf(
-        "knn2022 k %zu stats %s mu %.6f sigma %.6f inner %zu of %zu median_keyframe_ms %.3f\n",
-        m.params().k, m.params().fixed_statistics ? "first-pass" : "online", m.mu(), m.sigma(),
-        totals.rated, total.points, ms.empty() ? 0.0 : ms[ms.size() / 2]);
-  }
+  note_skipped_points(opt.input, total.nonfinite, total.out_of_range, map.grid().max_coord(),
+                      map.grid().resolution());
+  note_empty_map(opt.input, totals.clouds, total.points, map.count_voxels().known(), model);
+  print_model_line(mapper, opt, totals);
   const auto counts = map.count_voxels();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -379,15 +319,6 @@ void write_map_run_files(const OccupancyMap<OcKey>& map, const Args& args, const
 void print_files(const std::vector<std::string>& written, const std::vector<std::string>& notes) {
   for (const std::string& n : notes) std::printf("%s\n", n.c_str());
   print_written(written);
-}
-
-/// One past the last cloud the run maps (--first, --count); UsageError when --first is past the
-/// input's end.
-std::size_t last_cloud(const MapOptions& opt, const io::ScanSource& source) {
-  if (opt.first > source.size() || (opt.first == source.size() && source.size() > 0))
-    throw UsageError("--first " + std::to_string(opt.first) + ": " + opt.input + " has " +
-                     std::to_string(source.size()) + " clouds");
-  return opt.first + std::min(opt.count, source.size() - opt.first);
 }
 
 template <class Model>
@@ -437,7 +368,12 @@ void map_file_options(const Args& args, MapOptions& opt) {
                                          "--out-png", "--out-html", "--out-grid"});
   const OutputList files = map_file_outputs(opt.files);
   check_outputs(files);
-  check_outputs_not_inputs(files,
+  OutputList outputs = files;
+  if (args.has("--out-tiles")) {  // a folder: StagingDir checks it when the run starts
+    outputs.emplace_back("--out-tiles", args.str("--out-tiles"));
+    io::StagingDir::check_target(args.str("--out-tiles"), tiles::is_tile_set);
+  }
+  check_outputs_not_inputs(outputs,
                            requested_inputs(args, {"--input", "--init-map", "--corrections"}));
   check_map_file_flags(args, opt.files);
   if (args.has("--grid-z")) opt.grid_band = parse_range("--grid-z", args.str("--grid-z"));
@@ -544,10 +480,42 @@ void check_model_flags(const Args& args, const std::string& model) {
 
 }  // namespace
 
+/// The model flags the user gave, as text (what a tile set's index records of the model).
+std::string model_options_text(const Args& args) {
+  std::string text;
+  for (const OptionGroup& g : map_spec().groups) {
+    if (g.title.find("model") == std::string::npos) continue;
+    for (const Option& o : g.options) {
+      if (!args.has(o.name())) continue;
+      text += (text.empty() ? "" : " ") + o.name();
+      if (o.takes_value()) text += " " + args.str(o.name());
+    }
+  }
+  return text;
+}
+
+/// The run as a tile set when --out-tiles asks for one, with the key width chosen.
+template <class Model>
+int run_map_tiles_with(const Args& args, const MapOptions& opt, const Model& model,
+                       const TileOptions& t) {
+  if (t.key_bits == 21)
+    return run_map_tiles<Model, WideKey>(opt, model, t, model_options_text(args));
+  return run_map_tiles<Model, OcKey>(opt, model, t, model_options_text(args));
+}
+
+/// One run of a model: a tile set, or the map in one process.
+template <class Model>
+int run_model(const Args& args, const MapOptions& opt, const TileOptions& t, const Model& model) {
+  if (!t.dir.empty()) return run_map_tiles_with(args, opt, model, t);
+  if (t.key_bits == 21) return run_map_wide(opt, model);
+  return run_map_with(args, opt, model);
+}
+
 int run_map(const Args& args) {
   const std::string model = args.str("--model");
   check_model_flags(args, model);
   const MapOptions opt = map_options(args);
+  const TileOptions tiles = tile_options(args, opt);
   const auto files = [&](const OccupancyMap<OcKey>& map, const MapRun& run,
                          const std::string& title, std::vector<std::string>& written,
                          std::vector<std::string>& notes) {
@@ -557,23 +525,23 @@ int run_map(const Args& args) {
     const OctoMapModel om =
         OctoMapModel::from_probabilities(args.number("--prob-hit"), args.number("--prob-miss"));
     if (args.has("--corrections")) return run_map_corrections(args, opt, om, files);
-    return run_map_with(args, opt, om);
+    return run_model(args, opt, tiles, om);
   }
   if (model == "knn2022") {
     bool first_pass = true;
     Knn2022Params p = knn2022_params(args, first_pass);
     if (first_pass) p = knn2022_first_pass(opt, p);
-    return run_map_with(args, opt, Knn2022Model(p));
+    return run_model(args, opt, tiles, Knn2022Model(p));
   }
   if (model == "robust") {
     RobustModelParams rp;
     rp.knn = knn_params(args);
     rp.margin_scale = args.number("--margin-scale");
-    return run_map_with(args, opt, RobustModel(rp));
+    return run_model(args, opt, tiles, RobustModel(rp));
   }
   if (args.has("--corrections"))
     return run_map_corrections(args, opt, KnnModel(knn_params(args)), files);
-  return run_map_with(args, opt, KnnModel(knn_params(args)));
+  return run_model(args, opt, tiles, KnnModel(knn_params(args)));
 }
 
 }  // namespace knnocc::cli

@@ -155,6 +155,12 @@ inline std::pair<double, double> parse_range(const std::string& flag, const std:
   return {v[0], v[1]};
 }
 
+/// The model's name as --model takes it.
+inline const char* model_name(const OctoMapModel&) { return "octomap"; }
+inline const char* model_name(const KnnModel&) { return "knn"; }
+inline const char* model_name(const RobustModel&) { return "robust"; }
+inline const char* model_name(const Knn2022Model&) { return "knn2022"; }
+
 /// The model's name in titles and pictures.
 inline const char* model_title(const OctoMapModel&) { return "OctoMap model"; }
 inline const char* model_title(const KnnModel&) { return "k-NN model"; }
@@ -164,22 +170,23 @@ inline const char* model_title(const Knn2022Model&) { return "2022 k-NN model"; 
 /// The notes (stderr) on points a map holds no update from: NaN/Inf coordinates, points outside
 /// the key range (|c| >= max_coord), e.g. moved there by a correction.
 inline void note_skipped_points(const std::string& input, std::size_t nonfinite,
-                                std::size_t out_of_range, double max_coord) {
+                                std::size_t out_of_range, double max_coord, double res) {
   if (nonfinite)
     std::fprintf(stderr, "knnocc map: %s: skipped %zu points with NaN/Inf coordinates\n",
                  input.c_str(), nonfinite);
   if (out_of_range)
     std::fprintf(stderr,
                  "knnocc map: %s: skipped %zu points outside the map's key range (|c| >= %g m at "
-                 "--res %g); use a coarser --res (the library's WideKey maps reach 64x farther)\n",
-                 input.c_str(), out_of_range, max_coord, max_coord / 32768.0);
+                 "--res %g); use a coarser --res%s\n",
+                 input.c_str(), out_of_range, max_coord, res,
+                 max_coord <= 32768.0 * res * 1.5 ? ", or --key-bits 21 (64x farther)" : "");
 }
 
 /// A warning (stderr) when clouds were read and the map holds no voxel: never silent.
 template <class Model>
 void note_empty_map(const std::string& input, std::size_t clouds, std::size_t points,
-                    const OccupancyMap<OcKey>& map, const Model&) {
-  if (clouds == 0 || map.count_voxels().known() > 0) return;
+                    std::size_t known_voxels, const Model&) {
+  if (clouds == 0 || known_voxels > 0) return;
   const char* why = std::is_same_v<Model, RobustModel>
                         ? "; the robust model adds a map point's evidence only while it believes "
                           "the point real (docs/robust_model.md)"

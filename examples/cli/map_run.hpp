@@ -56,8 +56,8 @@ inline void crop_cloud(io::Cloud& c, double crop) {
 /// their own coordinates: whatever the pose, such a cloud is in other units or one of its
 /// columns is not a coordinate. io::Error naming `file` and the likely cause. (Points that a pose
 /// moves out of the key range are skipped and counted, as the map's notes say.)
-inline void check_key_range(const io::Cloud& cloud, const Grid<OcKey>& grid,
-                            const std::string& file) {
+template <class Key>
+void check_key_range(const io::Cloud& cloud, const Grid<Key>& grid, const std::string& file) {
   const double limit = grid.max_coord();
   std::size_t finite = 0, out = 0;
   double worst = 0.0;
@@ -91,7 +91,8 @@ class MapRun {
 
   /// Scan i read from `file`: its points moved into the sensor frame (--points-frame world),
   /// checked against the key range, cropped; the up estimate and the path take its pose.
-  void prepare(io::Scan& scan, const Grid<OcKey>& grid, const std::string& file) {
+  template <class Key>
+  void prepare(io::Scan& scan, const Grid<Key>& grid, const std::string& file) {
     if (in_.world_points) io::transform_to_sensor(scan.pose, scan.cloud.points);
     up_.add(scan.pose, scan.cloud.points);
     path_.push_back(Point3d{scan.pose.t.x(), scan.pose.t.y(), scan.pose.t.z()});

@@ -38,6 +38,12 @@ class Progress {
     std::fflush(stderr);
     drawn_ = true;
   }
+  /// A new total (work whose size is known only once it starts).
+  void retotal(std::size_t total) {
+    if (total == total_) return;
+    total_ = total;
+    enabled_ = enabled_ || (isatty(STDERR_FILENO) == 1 && total > 1 && !finished_);
+  }
   /// Clears the line (call before printing the summary).
   void finish() {
     if (drawn_) {
@@ -46,6 +52,7 @@ class Progress {
     }
     drawn_ = false;
     enabled_ = false;
+    finished_ = true;
   }
 
  private:
@@ -63,6 +70,7 @@ class Progress {
   std::size_t total_;
   bool enabled_;
   bool drawn_ = false;
+  bool finished_ = false;
   std::chrono::steady_clock::time_point start_, last_{};
 };
 

@@ -16,6 +16,7 @@
 #include "input_guard.hpp"
 #include "map_files.hpp"
 #include "output_set.hpp"
+#include "tile_set_files.hpp"
 #include "view_page.hpp"
 
 namespace knnocc::cli {
@@ -38,7 +39,10 @@ Only the faces between an occupied and a non-occupied cell are drawn; a map with
 faces than --max-faces is drawn at a coarser level (cells of 2, 4, ... voxels, occupied when
 any voxel in them is), and the page says so.
   MAP                   .bt or .ot (OctoMap trees), or a voxel list (x y z logodds per line, as
-                        --out-voxels writes) named .voxels or .txt, which needs --res; at most 64
+                        --out-voxels writes) named .voxels or .txt, which needs --res; at most 64;
+                        or a tile set folder (knnocc map --out-tiles), read tile by tile: its
+                        free voxels too when they fit --memory-limit, and a map beyond
+                        OctoMap's key range at the finest coarser resolution that holds it
 The page is the first MAP's name with .html unless --out names it. --path draws the camera path
 of the sequence the map was built from. Prints `wrote FILE (N maps)`.
 )";
@@ -87,6 +91,7 @@ std::vector<std::string> view_names(const Args& args) {
 }
 
 OccupancyMap<OcKey> read_view_map(const Args& args, const std::string& in) {
+  if (is_tile_set_path(in)) return read_tile_set_map(in, true, "view");
   const std::string ext = lower_extension(in);
   if (!is_tree_file(in) && ext != ".voxels" && ext != ".txt")
     throw UsageError("unknown map extension '" + ext + "' of " + in +

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// knnocc umbrella header: every public header but those of io/, eval/, sim/ and tiles/ (they read and
-// write files and need Eigen: include those one by one). tests/include_layers checks that this
+// knnocc umbrella header: every public header but those of io/, eval/, sim/ and tiles/ (they read
+// and write files and need Eigen: include those one by one). tests/include_layers checks that this
 // list is complete.
 // Prefer the module headers in your own code: include only what you use.
 

@@ -4,10 +4,12 @@ model with its first pass's statistics and with running ones), live corrections,
 a single point file; queries agree with the tool's voxel list; read_points reads every cloud
 format the tool writes. Generated data (`knnocc sim`); the same on real data: test_real_data.py."""
 
+import subprocess
+
 import numpy as np
 import pytest
 
-from conftest import crop, map_sequence, need_tool, random_scan, run_tool, tool_stats
+from conftest import TOOL, crop, map_sequence, need_tool, random_scan, run_tool, tool_stats
 
 need_tool()
 
@@ -156,3 +158,45 @@ def test_robust_with_slam_counters_equals_the_tool(knnocc, drift_scene, tmp_path
     assert with_counters.map.to_bytes("ot") == ot
     assert without.map.to_bytes("bt") != bt  # the counters are used
     assert knnocc.read_sequence(truth).evidence(0) is None
+
+
+@pytest.mark.parametrize("model", ["octomap", "robust"])
+def test_wide_mapper_and_its_tiles_equal_the_tool(knnocc, drift_scene, tmp_path, model):
+    """Mapper(..., wide=True) (21-bit keys) inside OctoMap's range is the 16-bit map byte for byte;
+    write_tiles writes a tile set that the tool merges into the same files."""
+    truth = drift_scene / "truth"
+    bt, ot, _ = tool_map(tmp_path, model, "--input", truth, "--model", model, "--crop", 4,
+                         "--res", 0.1)
+    wide = map_sequence(knnocc, truth, 0.1, model=model, max_distance=4, wide=True)
+    assert wide.wide and not map_sequence(knnocc, truth, 0.1, model=model, max_distance=4).wide
+    assert wide.map.to_bytes("bt") == bt
+    assert wide.map.to_bytes("ot") == ot
+    tiles = tmp_path / "tiles"
+    assert wide.write_tiles(str(tiles), tile_depth=11) > 1
+    assert "key_bits 21" in (tiles / "index.txt").read_text()
+    run_tool("merge", tiles, "-o", tmp_path / "merged.ot")
+    assert (tmp_path / "merged.ot").read_bytes() == ot
+
+
+def test_wide_mapper_beyond_octomaps_range(knnocc, tmp_path):
+    """Beyond OctoMap's key range a wide Mapper maps every point; its map is refused as one
+    OctoMap map (ValueError naming the extent) and written as a tile set, which `knnocc info`
+    reads and `knnocc merge` refuses as one file."""
+    mapper, narrow, near = knnocc.Mapper(0.1, wide=True), knnocc.Mapper(0.1), knnocc.Mapper(0.1)
+    for x in (0.0, 5000.0):
+        origin = np.array([x, 0.0, 1.0])
+        points = origin + np.array([[2.0, 0.5, -1.0], [3.0, -1.0, 0.5], [2.5, 0.0, 0.0]])
+        mapper.insert_keyframe(origin, points)
+        narrow.insert_keyframe(origin, points)
+        if x == 0.0:
+            near.insert_keyframe(origin, points)
+    with pytest.raises(ValueError, match="beyond the"):
+        mapper.map.occupancy_at(np.zeros((1, 3)))
+    assert narrow.map.to_bytes("ot") == near.map.to_bytes("ot")  # 16 bits: the far scan skipped
+    tiles = tmp_path / "far"
+    assert mapper.write_tiles(str(tiles), tile_depth=8) >= 2
+    info = run_tool("info", tiles)
+    assert "key bits: 21" in info and "checked: every tile matches the index" in info
+    r = subprocess.run([TOOL, "merge", str(tiles), "-o", str(tmp_path / "far.bt")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "beyond the +-3276.8 m" in r.stderr

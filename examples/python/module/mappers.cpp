@@ -160,7 +160,9 @@ template <class Ref>
 void bind_owner_members(py::class_<Ref>& c, const char* cls, const char* models) {
   c.def_property_readonly(
       "map", [](const Ref& self) { return map_of(self.owner); },
-      "The map, as an OccupancyMap that reads only (it follows its owner).");
+      "The map, as an OccupancyMap that reads only (it follows its owner). A wide Mapper shows "
+      "its map at OctoMap's keys, made when read after an insert (ValueError when it reaches "
+      "beyond their range: write_tiles holds any map).");
   c.def_property_readonly(
       "model", [](const Ref& self) { return self.model; }, models);
   c.def(
@@ -175,7 +177,7 @@ void bind_owner_members(py::class_<Ref>& c, const char* cls, const char* models)
       "memory_limit",
       [name = member_name(cls, "memory_limit")](const Ref& self) {
         const auto lock = self.owner->guard.read(name);
-        return self.owner->map().memory_limit();
+        return self.owner->memory_limit();
       },
       [name = member_name(cls, "memory_limit")](const Ref& self, std::size_t bytes) {
         const auto lock = self.owner->guard.write(name);
@@ -207,7 +209,7 @@ ValueError for an unknown model or parameter, or a value out of range.)";
 constexpr const char* kMapperDoc =
     R"(One keyframe at a time into an occupancy map (the paper's Alg. 3).
 
-Mapper(resolution, model="octomap", **params)
+Mapper(resolution, model="octomap", *, wide=False, **params)
 
   model="octomap"  OctoMap's insertPointCloud, bit for bit (dense depth cameras, LiDAR)
   model="knn"      the paper's k-NN model: each point rated by its mean distance to its k
@@ -222,6 +224,9 @@ Mapper(resolution, model="octomap", **params)
   mapper.map.write("map.bt")
 
 The same calls as the knnocc tool's `map` command build the same map, byte for byte.
+wide=True: 21-bit keys (+-2^20 voxels: +-104.9 km at 0.1 m, the tool's --key-bits 21) instead of
+OctoMap's 16 bits (+-3.3 km at 0.1 m); inside OctoMap's range the same map, voxel for voxel.
+write_tiles(path) writes any map as a tile set (docs/tiles.md).
 )";
 
 constexpr const char* kLiveDoc =
@@ -241,15 +246,36 @@ k-NN model rebuilds (its statistics change every later rating).
 
 void bind_mappers(py::module_& m) {
   py::class_<MapperRef> mapper(m, "Mapper", (std::string(kMapperDoc) + kParamsDoc).c_str());
-  mapper.def(py::init([](double resolution, const std::string& model, const py::kwargs& kw) {
+  mapper.def(py::init([](double resolution, const std::string& model, const py::object& wide_obj,
+                         const py::kwargs& kw) {
+               const bool wide = flag(wide_obj, "wide");
                const ModelOptions o = options_in("Mapper", model, kw, false);
-               if (model == "octomap") return MapperRef{make_octomap_mapper(resolution, o), model};
-               if (model == "knn") return MapperRef{make_knn_mapper(resolution, o), model};
-               if (model == "knn2022") return MapperRef{make_knn2022_mapper(resolution, o), model};
-               return MapperRef{make_robust_mapper(resolution, o), model};
+               if (model == "octomap")
+                 return MapperRef{make_octomap_mapper(resolution, o, wide), model};
+               if (model == "knn") return MapperRef{make_knn_mapper(resolution, o, wide), model};
+               if (model == "knn2022")
+                 return MapperRef{make_knn2022_mapper(resolution, o, wide), model};
+               return MapperRef{make_robust_mapper(resolution, o, wide), model};
              }),
-             py::arg("resolution"), py::arg("model") = "octomap",
+             py::arg("resolution"), py::arg("model") = "octomap", py::kw_only(),
+             py::arg("wide") = false,
              "A new mapper with an empty map; see help(knnocc.Mapper) for the parameters.");
+  mapper.def_property_readonly(
+      "wide", [](const MapperRef& self) { return self.owner->wide(); },
+      "Whether the map has 21-bit keys (Mapper(..., wide=True)).");
+  mapper.def(
+      "write_tiles",
+      [](const MapperRef& self, const std::string& path, int tile_depth) {
+        const auto lock = self.owner->guard.read("Mapper.write_tiles");
+        const py::gil_scoped_release nogil;
+        return self.owner->write_tiles(path, tile_depth);
+      },
+      py::arg("path"), py::arg("tile_depth") = 6,
+      R"(Writes the map as a tile set in the folder `path` (new or empty, or an earlier tile set,
+replaced): one OctoMap .ot per tile of 2^(16 - tile_depth) voxels per edge and an index
+(docs/tiles.md); returns the number of tiles. Any extent, wide or not: `knnocc merge path -o
+map.bt` joins it into one file where it fits OctoMap's key range, and `knnocc view` / `info` /
+`convert` read it as it is.)");
   mapper.def(
       "insert_keyframe",
       [](const MapperRef& self, const py::object& origin, const py::object& points,

@@ -2,6 +2,9 @@
 // The owners of owners.hpp for one sensor model: Mapper<Model> and LiveMapper<Model>. Included
 // by models_*.cpp only, one model per translation unit.
 
+#include <optional>
+#include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -9,17 +12,30 @@
 
 namespace knnocc::python {
 
-template <class Model>
+/// Mapper<Model, Key>: OctoMap's keys, or 21-bit keys (Mapper(..., wide=True)), whose map is
+/// shown at OctoMap's keys where it fits (map(): made again after each insert, std::out_of_range
+/// beyond OctoMap's key range) and written whole as a tile set (write_tiles).
+template <class Model, class Key = OcKey>
 class MapperOf final : public MapperOwner {
  public:
-  MapperOf(double resolution, Model model, const MapperOptions& o)
-      : mapper_(resolution, std::move(model), o) {}
-  const Map& map() const override { return mapper_.map(); }
+  MapperOf(double resolution, Model model, const MapperOptions& o, std::string name)
+      : mapper_(resolution, std::move(model), o), name_(std::move(name)) {}
+  const Map& map() const override {
+    if constexpr (std::is_same_v<Key, OcKey>) {
+      return mapper_.map();
+    } else {
+      if (!narrow_) narrow_ = narrow_copy(mapper_.map());
+      return *narrow_;
+    }
+  }
   void set_memory_limit(std::size_t bytes) override { mapper_.map().set_memory_limit(bytes); }
+  std::size_t memory_limit() const override { return mapper_.map().memory_limit(); }
+  bool wide() const override { return !std::is_same_v<Key, OcKey>; }
   void insert_keyframe(const Point3d& origin, const PointsView& points,
                        const std::vector<std::uint64_t>& ids,
                        const std::vector<PointEvidence>& evidence) override {
-    if constexpr (Mapper<Model>::rates_cloud) {  // float world points, as the tool gives them
+    narrow_.reset();
+    if constexpr (Mapper<Model, Key>::rates_cloud) {  // float world points, as the tool gives them
       floats_.clear();
       points.visit([&](const auto& span) {
         for (std::size_t i = 0; i < span.size(); ++i)
@@ -31,15 +47,20 @@ class MapperOf final : public MapperOwner {
     }
   }
   TrackerStats statistics() const override {
-    if constexpr (Mapper<Model>::uses_map_cloud)
+    if constexpr (Mapper<Model, Key>::uses_map_cloud)
       return tracker_stats(mapper_.tracker());
     else
       return {};
   }
+  std::size_t write_tiles(const std::string& dir, int depth) const override {
+    return write_map_tiles(mapper_.map(), mapper_.integration(), name_, dir, depth);
+  }
 
  private:
-  Mapper<Model> mapper_;         // not movable: this object is made in place and never moves
-  std::vector<Point3f> floats_;  // the 2022 model's float points
+  Mapper<Model, Key> mapper_;          // not movable: this object is made in place and never moves
+  std::string name_;                   // the model's name (a tile set's index says it)
+  mutable std::optional<Map> narrow_;  // a wide map at OctoMap's keys, made when asked
+  std::vector<Point3f> floats_;        // the 2022 model's float points
 };
 
 template <class Model>
@@ -70,5 +91,14 @@ class LiveOf final : public LiveOwner {
  private:
   LiveMapper<Model, OcKey, Pose> live_;
 };
+
+/// A Mapper of `Model`, with OctoMap's keys or 21-bit ones.
+template <class Model>
+std::shared_ptr<MapperOwner> make_mapper_of(double resolution, Model model, const MapperOptions& o,
+                                            bool wide, const char* name) {
+  if (wide)
+    return std::make_shared<MapperOf<Model, WideKey>>(resolution, std::move(model), o, name);
+  return std::make_shared<MapperOf<Model>>(resolution, std::move(model), o, name);
+}
 
 }  // namespace knnocc::python

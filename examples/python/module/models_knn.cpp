@@ -6,8 +6,8 @@
 
 namespace knnocc::python {
 
-std::shared_ptr<MapperOwner> make_knn_mapper(double resolution, const ModelOptions& o) {
-  return std::make_shared<MapperOf<KnnModel>>(resolution, KnnModel(o.knn), o.mapper);
+std::shared_ptr<MapperOwner> make_knn_mapper(double resolution, const ModelOptions& o, bool wide) {
+  return make_mapper_of(resolution, KnnModel(o.knn), o.mapper, wide, "knn");
 }
 
 std::shared_ptr<LiveOwner> make_knn_live(double resolution, const ModelOptions& o) {

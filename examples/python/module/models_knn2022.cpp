@@ -9,8 +9,9 @@
 
 namespace knnocc::python {
 
-std::shared_ptr<MapperOwner> make_knn2022_mapper(double resolution, const ModelOptions& o) {
-  return std::make_shared<MapperOf<Knn2022Model>>(resolution, Knn2022Model(o.knn2022), o.mapper);
+std::shared_ptr<MapperOwner> make_knn2022_mapper(double resolution, const ModelOptions& o,
+                                                 bool wide) {
+  return make_mapper_of(resolution, Knn2022Model(o.knn2022), o.mapper, wide, "knn2022");
 }
 
 namespace {

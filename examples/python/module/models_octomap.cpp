@@ -36,9 +36,10 @@ std::shared_ptr<MapObject> make_map_object(Map map, double prob_hit, double prob
   return std::make_shared<MapWithInserter>(std::move(map), prob_hit, prob_miss);
 }
 
-std::shared_ptr<MapperOwner> make_octomap_mapper(double resolution, const ModelOptions& o) {
-  return std::make_shared<MapperOf<OctoMapModel>>(
-      resolution, OctoMapModel::from_probabilities(o.prob_hit, o.prob_miss), o.mapper);
+std::shared_ptr<MapperOwner> make_octomap_mapper(double resolution, const ModelOptions& o,
+                                                 bool wide) {
+  return make_mapper_of(resolution, OctoMapModel::from_probabilities(o.prob_hit, o.prob_miss),
+                        o.mapper, wide, "octomap");
 }
 
 std::shared_ptr<LiveOwner> make_octomap_live(double resolution, const ModelOptions& o) {

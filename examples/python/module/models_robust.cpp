@@ -6,11 +6,12 @@
 
 namespace knnocc::python {
 
-std::shared_ptr<MapperOwner> make_robust_mapper(double resolution, const ModelOptions& o) {
+std::shared_ptr<MapperOwner> make_robust_mapper(double resolution, const ModelOptions& o,
+                                                bool wide) {
   RobustModelParams p;
   p.knn = o.knn;
   p.margin_scale = o.margin_scale;
-  return std::make_shared<MapperOf<RobustModel>>(resolution, RobustModel(p), o.mapper);
+  return make_mapper_of(resolution, RobustModel(p), o.mapper, wide, "robust");
 }
 
 }  // namespace knnocc::python

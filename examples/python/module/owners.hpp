@@ -6,6 +6,7 @@
 // Every owner carries the Guard of its map: a Mapper's map shown to Python (Mapper.map) is the
 // same object as far as the one-writer rule goes.
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -68,6 +69,7 @@ class MapOwner {
   virtual ~MapOwner() = default;
   virtual const Map& map() const = 0;
   virtual void set_memory_limit(std::size_t bytes) = 0;
+  virtual std::size_t memory_limit() const { return map().memory_limit(); }
   Guard guard;
 };
 
@@ -87,7 +89,7 @@ class MapObject : public MapOwner {
 /// std::invalid_argument on bad probabilities.
 std::shared_ptr<MapObject> make_map_object(Map map, double prob_hit, double prob_miss);
 
-/// Mapper<Model> for one of the four models.
+/// Mapper<Model, Key> for one of the four models, with OctoMap's keys or 21-bit ones.
 class MapperOwner : public MapOwner {
  public:
   /// `ids` and `evidence` (the SLAM counters) each empty or one per point.
@@ -95,11 +97,50 @@ class MapperOwner : public MapOwner {
                                const std::vector<std::uint64_t>& ids,
                                const std::vector<PointEvidence>& evidence) = 0;
   virtual TrackerStats statistics() const = 0;
+  /// 21-bit keys (map() is then the map at OctoMap's keys, or std::domain_error beyond them).
+  virtual bool wide() const = 0;
+  /// The map as a tile set in the new folder `dir` (tiles at `depth`); returns the tiles.
+  virtual std::size_t write_tiles(const std::string& dir, int depth) const = 0;
 };
-std::shared_ptr<MapperOwner> make_octomap_mapper(double resolution, const ModelOptions& o);
-std::shared_ptr<MapperOwner> make_knn_mapper(double resolution, const ModelOptions& o);
-std::shared_ptr<MapperOwner> make_robust_mapper(double resolution, const ModelOptions& o);
-std::shared_ptr<MapperOwner> make_knn2022_mapper(double resolution, const ModelOptions& o);
+std::shared_ptr<MapperOwner> make_octomap_mapper(double resolution, const ModelOptions& o,
+                                                 bool wide);
+std::shared_ptr<MapperOwner> make_knn_mapper(double resolution, const ModelOptions& o, bool wide);
+std::shared_ptr<MapperOwner> make_robust_mapper(double resolution, const ModelOptions& o,
+                                                bool wide);
+std::shared_ptr<MapperOwner> make_knn2022_mapper(double resolution, const ModelOptions& o,
+                                                 bool wide);
+
+/// A map of 21-bit keys at OctoMap's keys (std::domain_error naming its extent when it reaches
+/// beyond them).
+template <class Key>
+Map narrow_copy(const OccupancyMap<Key>& wide) {
+  constexpr std::int64_t shift = Key::center - OcKey::center;
+  Map out(wide.resolution(), wide.params());
+  std::int64_t reach = 0;
+  wide.for_each_voxel([&](const Key& k, float) {
+    for (int a = 0; a < 3; ++a)
+      reach =
+          std::max({reach, Key::center - std::int64_t{k[a]}, std::int64_t{k[a]} + 1 - Key::center});
+  });
+  if (reach > OcKey::center)
+    throw std::domain_error("the map reaches " + std::to_string(double(reach) * wide.resolution()) +
+                            " m from its origin, beyond the +-" +
+                            std::to_string(32768.0 * wide.resolution()) +
+                            " m of OctoMap's keys: write it as a tile set (Mapper.write_tiles)");
+  wide.for_each_voxel([&](const Key& k, float v) {
+    out.set(
+        OcKey(static_cast<std::uint16_t>(k[0] - shift), static_cast<std::uint16_t>(k[1] - shift),
+              static_cast<std::uint16_t>(k[2] - shift)),
+        v);
+  });
+  return out;
+}
+
+/// `map` as a tile set in the new folder `dir` (an existing tile set is replaced): its tiles at
+/// `depth` and an index with the mapper's integration constants; returns the tiles written.
+template <class Key>
+std::size_t write_map_tiles(const OccupancyMap<Key>& map, const IntegrationParams& integration,
+                            const std::string& model, const std::string& dir, int depth);
 
 /// LiveMapper<Model, OcKey, Pose> for the OctoMap and k-NN models.
 class LiveOwner : public MapOwner {

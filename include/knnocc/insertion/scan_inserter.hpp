@@ -161,6 +161,14 @@ class ScanInserter {
   void clear_clip() { clip_.reset(); }
   bool clipped() const { return clip_.has_value(); }
 
+ private:
+  // The clip of the apply's brick filter: set when the clip's edges are whole bricks (a scan from
+  // inside it then marks voxels outside it, detail/clip.hpp).
+  const detail::KeyBox* clip() const {
+    return clip_ && detail::brick_aligned(*clip_) ? &*clip_ : nullptr;
+  }
+
+ public:
   /// Inserts one scan of world-frame points seen from `origin`. max_range < 0: no limit;
   /// max_range == 0 or NaN is rejected (std::invalid_argument; abort without exceptions).
   template <class Points, class Origin>
@@ -271,7 +279,7 @@ class ScanInserter {
       detail::ScanPart& part = scratch(t).part;
       std::vector<detail::RayEnd>& crossing = scratch(t).crossing;
       crossing.clear();
-      if (clip_) detail::clip_part<Key>(part, o, *clip_, crossing);
+      if (clip_) detail::clip_part<Key>(part, o, *clip_, crossing, 1.0 / map_->resolution());
       scan.crossing += crossing.size();
       scan.box.merge(part.box);
       scan.steps += part.steps;
@@ -304,7 +312,7 @@ class ScanInserter {
         mine.visits = walk_dense_rays(mine, fan, [&rays](const RayEnd*& pos, const RayEnd*& stop) {
           return rays.take(pos, stop);
         });
-        if (!mine.crossing.empty()) mine.visits += walk_crossing_dense(mine, o);
+        if (!mine.crossing.empty()) mine.visits += walk_crossing_dense(mine, o, fan);
       };
       team_.run(job);
       add_visits(st);
@@ -324,7 +332,7 @@ class ScanInserter {
                                        bricks.bricks().capacity() - map_->num_bricks());
     walk_hashed(o, rays);
     add_visits(st);
-    detail::order_hashed<Key>(scratch_, threads(), order_, slots_, limit, in_map);
+    detail::order_hashed<Key>(scratch_, threads(), order_, slots_, limit, in_map, clip());
     apply(detail::HashedUpdates{scratch(0).hashed, order_, slots_}, values, st);
     scratch(0).hashed.clear();
   }
@@ -399,20 +407,54 @@ class ScanInserter {
                             *mine.block, more, marks);
   }
 
-  // A clipped scan's crossing rays (detail/clip.hpp) into the thread's miss bitmap, whose box
-  // holds their voxels inside the clip; returns the voxels marked.
-  std::size_t walk_crossing_dense(detail::ThreadScratch& mine, const detail::ScanOrigin& o) {
+  // A clipped scan's crossing rays (detail/clip.hpp) into the thread's miss bitmap; returns the
+  // voxels visited. With a clip of whole bricks each ray jumps to its first voxel inside the clip
+  // and is walked on from there to its end on the fast path, in a box that holds that rest (the
+  // apply leaves out the bricks past the clip); otherwise each marks only the voxels inside.
+  std::size_t walk_crossing_dense(detail::ThreadScratch& mine, const detail::ScanOrigin& o,
+                                  const detail::RayFan& fan) {
     detail::ScanBitmap& miss = mine.miss;
-    if (miss.has_bytes()) {
-      const detail::ByteMarks marks{miss.bytes()};
-      return detail::walk_crossing(
-          map_->grid(), o, mine.crossing, *clip_,
-          [&](const KeyPosition& p) { marks(miss.index(p.k[0], p.k[1], p.k[2])); });
-    }
-    const detail::BitMarks marks{miss.words()};
-    return detail::walk_crossing(map_->grid(), o, mine.crossing, *clip_, [&](const KeyPosition& p) {
-      marks(miss.index(p.k[0], p.k[1], p.k[2]));
-    });
+    if (miss.has_bytes()) return walk_crossing_marks(mine, o, fan, detail::ByteMarks{miss.bytes()});
+    return walk_crossing_marks(mine, o, fan, detail::BitMarks{miss.words()});
+  }
+
+  template <class Marks>
+  std::size_t walk_crossing_marks(detail::ThreadScratch& mine, const detail::ScanOrigin& o,
+                                  const detail::RayFan& fan, Marks marks) {
+    const detail::ScanBitmap& miss = mine.miss;
+    auto mark = [&](const KeyPosition& p) { marks(miss.index(p.k[0], p.k[1], p.k[2])); };
+    if (!clip()) return detail::walk_crossing(map_->grid(), o, mine.crossing, *clip_, mark);
+    std::size_t visits = 0, next_ray = 0;
+    detail::LinearRay ray;
+    auto next = [&]() -> const detail::LinearRay* {
+      while (next_ray < mine.crossing.size()) {
+        const detail::RayEnd& r = mine.crossing[next_ray++];
+        int step[3];
+        detail::setup_walk(map_->grid(), o.point, r.end, o.key, r.key, step, ray.state);
+        KeyPosition at{{o.key[0], o.key[1], o.key[2]},
+                       {step[0], step[1], step[2]},
+                       {r.key[0], r.key[1], r.key[2]}};
+        const WalkState whole = ray.state;
+        switch (detail::jump_to_entry(ray.state, at, *clip_)) {
+          case detail::Entry::never:
+            continue;
+          case detail::Entry::walk:  // the entry at the ray's very end: walked one voxel at a time
+            visits += detail::walk_clipped<Key>(whole, at, *clip_, mark);
+            continue;
+          case detail::Entry::jumped:
+            break;
+        }
+        ray.index = miss.index(at.k[0], at.k[1], at.k[2]);
+        ray.end_index = miss.index(r.key[0], r.key[1], r.key[2]);
+        for (int a = 0; a < 3; ++a) ray.stride[a] = step[a] * miss.stride(a);
+        ray.clear_end = detail::end_point_clear<Key>(fan, r, whole.length);
+        return &ray;
+      }
+      return nullptr;
+    };
+    const std::size_t walked =
+        detail::walk_linear_rays(detail::best_walk_path<Marks>(), next, marks);
+    return visits + walked;
   }
 
   // The hashed path: every hit into the first thread's bricks, then each thread's chunks of rays
@@ -458,10 +500,10 @@ class ScanInserter {
   // codes: the hits are in scratch(0).hit_list (one thread, no limit only).
   void apply_dense(const detail::ScanValues& values, ScanStats& st, bool codes = false) {
     if (threads() == 1 && !map_->memory_limit()) {
-      add_updates(detail::apply_dense_serial(*map_, scratch(0), values, codes), values, st);
+      add_updates(detail::apply_dense_serial(*map_, scratch(0), values, codes, clip()), values, st);
       return;
     }
-    detail::gather_dense<Key>(team_, scratch_, bricks_);
+    detail::gather_dense<Key>(team_, scratch_, bricks_, clip());
     apply(detail::GroupedUpdates{bricks_}, values, st);
   }
   void add_updates(const detail::UpdateCounts& c, const detail::ScanValues& values, ScanStats& st) {

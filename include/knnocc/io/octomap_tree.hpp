@@ -36,6 +36,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <string>
@@ -198,13 +199,16 @@ class OctreeEncoder {
   }
 
   /// The node of depth d (<= 13) whose lowest OctoMap key is `corner`, as the whole file holds it
-  /// (the voxels of the map outside the node are not looked at).
-  OctreeNode encode_node(int d, const std::array<std::uint32_t, 3>& corner) {
+  /// (the voxels of the map outside the node are not looked at). `bytes` false: its summary and
+  /// node count only (OctreeNode::data stays empty).
+  OctreeNode encode_node(int d, const std::array<std::uint32_t, 3>& corner, bool bytes = true) {
     OctreeNode out;
     gather(d, corner);
     data_.clear();
     nodes_ = 0;
+    count_only_ = !bytes;
     if (!order_.empty()) out.present = tree_node(d, 0, order_.size(), out.summary);
+    count_only_ = false;
     out.data = std::move(data_);
     data_.clear();
     out.nodes = nodes_;
@@ -234,7 +238,7 @@ class OctreeEncoder {
       codes |= code << (2 * i);
     }
     out.leaf = false;
-    out.value = max;
+    out.value = Full ? max : 0.0f;  // a .bt holds no values: its inner nodes' are unused
     if (Color) out.color = mean_color(kids, present);
     if constexpr (Full) {
       node_data(head, out, present);
@@ -326,9 +330,11 @@ class OctreeEncoder {
   void leaf(const OctreeNodeSummary& s, OctreeNodeSummary& out) {
     ++nodes_;
     if constexpr (Full) {
-      char bytes[kNodeBytes];
-      node_data(bytes, s, 0);
-      data_.append(bytes, kNodeBytes);
+      if (!count_only_) {
+        char bytes[kNodeBytes];
+        node_data(bytes, s, 0);
+        data_.append(bytes, kNodeBytes);
+      }
     }
     out = s;
     out.leaf = true;
@@ -368,7 +374,7 @@ class OctreeEncoder {
     const std::size_t start = data_.size();
     const std::uint64_t nodes_before = nodes_;
     ++nodes_;
-    data_.resize(start + kNodeBytes);
+    if (!count_only_) data_.append(kNodeBytes, '\0');  // the node's bytes, written below
     OctreeNodeSummary kids[8];
     unsigned present = 0;
     for (int i = 0; i < 8; ++i) {
@@ -380,12 +386,14 @@ class OctreeEncoder {
       return false;
     }
     OctreeNodeSummary combined;
-    if (combine(d, kids, present, combined, &data_[start])) {
+    char head[kNodeBytes];
+    if (combine(d, kids, present, combined, head)) {
       data_.resize(start);
       nodes_ = nodes_before;
       leaf(combined, out);
       return true;
     }
+    if (!count_only_) std::memcpy(&data_[start], head, kNodeBytes);
     out = combined;
     return true;
   }
@@ -410,6 +418,9 @@ class OctreeEncoder {
   }
 
   bool brick_node(const Brick& b, OctreeNodeSummary& out) {
+    if constexpr (!Full) {
+      if (count_only_) return brick_bt_count(b, out);
+    }
     if (b.known.count() == kBrickVoxels) {  // a whole known brick may be a single leaf
       const OctreeNodeSummary first = voxel(b, 0);
       bool uniform = true;
@@ -420,6 +431,80 @@ class OctreeEncoder {
       }
     }
     return brick_sub(b, kBrickDepth, 0, 0, 0, out);
+  }
+
+  // .bt, counting only: what brick_sub would give for the brick (its summary, its nodes added to
+  // nodes_), from its known and occupied voxels' masks, a level at a time: a node is absent
+  // without known voxels, a leaf when its 8 children are leaves of one class (its value that of
+  // child 0), else an inner node (its value unused in a .bt).
+  bool brick_bt_count(const Brick& b, OctreeNodeSummary& out) {
+    if (!b.known.any()) return false;
+    VoxelMask occ;
+    b.known.for_each([&](int i) {
+      if (occupied(b.get(i))) occ.set(i);
+    });
+    struct Node {
+      int state = 0;  // 0 absent, 1 free leaf, 2 occupied leaf, 3 inner
+      std::uint64_t nodes = 0;
+      float value = 0.0f;
+    };
+    Node level[64];  // the current level's nodes, x fastest: n^3 of them
+    // Depth 15: blocks of 2x2x2 voxels (voxel index x + 8 y + 64 z).
+    for (int bz = 0; bz < 4; ++bz)
+      for (int by = 0; by < 4; ++by)
+        for (int bx = 0; bx < 4; ++bx) {
+          int known = 0, full = 0;
+          for (int c = 0; c < 8; ++c) {
+            const int i =
+                (2 * bx + (c & 1)) + 8 * (2 * by + ((c >> 1) & 1)) + 64 * (2 * bz + ((c >> 2) & 1));
+            known += b.known.test(i);
+            full += occ.test(i);
+          }
+          Node& n = level[bx + 4 * by + 16 * bz];
+          const int first = 2 * bx + 16 * by + 128 * bz;
+          if (known == 0) {
+            n = Node{};
+          } else if (known == 8 && (full == 0 || full == 8)) {
+            n = Node{full ? 2 : 1, 1, b.get(first)};
+          } else {
+            n = Node{3, std::uint64_t(1 + known), 0.0f};
+          }
+        }
+    // Depths 14 and 13: 8 children each, from the level below.
+    for (int edge = 2; edge >= 1; edge /= 2) {
+      Node up[8];
+      for (int z = 0; z < edge; ++z)
+        for (int y = 0; y < edge; ++y)
+          for (int x = 0; x < edge; ++x) {
+            Node n;
+            int present = 0, leaves[3] = {0, 0, 0};
+            float first = 0.0f;
+            std::uint64_t below = 0;
+            for (int c = 0; c < 8; ++c) {
+              const int cx = 2 * x + (c & 1), cy = 2 * y + ((c >> 1) & 1), cz = 2 * z + (c >> 2);
+              const Node& k = level[cx + 2 * edge * cy + 4 * edge * edge * cz];
+              if (k.state == 0) continue;
+              ++present;
+              below += k.nodes;
+              if (k.state < 3) ++leaves[k.state];
+              if (c == 0) first = k.value;
+            }
+            if (present == 0) {
+              n = Node{};
+            } else if (present == 8 && (leaves[1] == 8 || leaves[2] == 8)) {
+              n = Node{leaves[2] == 8 ? 2 : 1, 1, first};
+            } else {
+              n = Node{3, 1 + below, 0.0f};
+            }
+            up[x + edge * y + edge * edge * z] = n;
+          }
+      for (int i = 0; i < edge * edge * edge; ++i) level[i] = up[i];
+    }
+    const Node& brick = level[0];
+    nodes_ += brick.nodes;
+    out.leaf = brick.state < 3;
+    out.value = brick.value;
+    return true;
   }
 
   bool brick_sub(const Brick& b, int d, int x, int y, int z, OctreeNodeSummary& out) {
@@ -446,6 +531,7 @@ class OctreeEncoder {
   std::vector<Entry> order_;
   std::string data_;
   std::uint64_t nodes_ = 0;
+  bool count_only_ = false;  // encode_node(..., bytes = false)
 };
 
 }  // namespace detail

@@ -8,6 +8,7 @@
 // WorldScan is how `knnocc map` hands a scan to a Mapper, whether it inserts the scan or rates
 // it: the same arithmetic in both, so a rated keyframe is what the one-process map integrates.
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -89,13 +90,13 @@ void count_rated(const Grid<Key>& grid, const RatedKeyframe& rk, const KeyframeS
 }
 
 /// The rating pass: scans [first, last) of `source`, each made ready by prepare(scan, i) (e.g.
-/// cropped), rated by `mapper` and written to `out` in order; progress(i) after scan i. Returns
-/// the run's totals; `out` is finished (rated.txt written).
+/// cropped), rated by `mapper` and written to `out` in order; rated(i, stats, milliseconds of
+/// the rating) after scan i. Returns the run's totals; `out` is finished (rated.txt written).
 template <class MapperT, class Key>
-RatingTotals rate_sequence(const io::ScanSource& source, std::size_t first, std::size_t last,
-                           MapperT& mapper, RatedStoreWriter<Key>& out,
-                           const std::function<void(io::Scan&, std::size_t)>& prepare,
-                           const std::function<void(std::size_t)>& progress) {
+RatingTotals rate_sequence(
+    const io::ScanSource& source, std::size_t first, std::size_t last, MapperT& mapper,
+    RatedStoreWriter<Key>& out, const std::function<void(io::Scan&, std::size_t)>& prepare,
+    const std::function<void(std::size_t, const KeyframeStats&, double)>& rated) {
   RatingTotals totals;
   WorldScan w;
   RatedKeyframe rk;
@@ -103,10 +104,13 @@ RatingTotals rate_sequence(const io::ScanSource& source, std::size_t first, std:
     io::Scan scan = source.load(i);
     if (prepare) prepare(scan, i);
     w.load<MapperT>(scan);
+    const auto t0 = std::chrono::steady_clock::now();
     const KeyframeStats ks = w.rate(mapper, rk);
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     count_rated(mapper.map().grid(), rk, ks, w.size<MapperT>(), mapper.options().max_range, totals);
     out.add(rk);
-    if (progress) progress(i);
+    if (rated) rated(i, ks, ms);
   }
   out.finish(mapper.integration(), totals);
   return totals;

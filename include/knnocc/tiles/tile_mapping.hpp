@@ -1,19 +1,24 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Mapping tiles from a folder of rated keyframes (tiles/rated_store.hpp): the tiles a run
-// reaches, one tile mapped from the keyframes that can reach it (each clipped to the tile: only
-// the part of a ray that can touch the tile is walked, with the keys of the whole walk), and a
-// whole tile set written tile by tile, so that a process holds one tile's map at a time. Another
-// process, or another machine sharing the folder, can map any tile alone (knnocc.dask does).
+// reaches; a box of tiles mapped from the keyframes that can reach it (each clipped to the box:
+// a scan from inside is walked whole, a ray from outside from its first voxel inside, with the
+// keys of the whole walk); and a whole tile set written, its tiles mapped together as far as a
+// memory limit allows. Another process, or another machine sharing the folder, can map any tile
+// alone (map_tile; knnocc.dask does).
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
+#include <new>
 #include <optional>
 #include <set>
 #include <string>
 #include <vector>
 
+#include "../core/memory_limit.hpp"
 #include "rated_store.hpp"
 #include "tile_grid.hpp"
 #include "tile_integrator.hpp"
@@ -39,28 +44,45 @@ std::vector<TileCoord> tiles_reached(const RatedStore& store, const TileGrid<Key
   return out;
 }
 
-/// Tile `c` of the run in `store`: the keyframes that can reach it, in order, each clipped to
-/// it. `memory_limit` bounds the tile's map (0: none; a tile that cannot fit is a
+/// A box of tiles, first and last per axis.
+struct TileBox {
+  TileCoord lo, hi;
+  std::int64_t count() const {
+    return (hi.t[0] - lo.t[0] + 1) * (hi.t[1] - lo.t[1] + 1) * (hi.t[2] - lo.t[2] + 1);
+  }
+};
+
+/// The tiles of `box` of the run in `store`, mapped together: the keyframes that can reach the box,
+/// in order, each clipped to it. `memory_limit` bounds the map (0: none; more is a
 /// MemoryLimitError); progress(keyframes done, of) after each keyframe.
 template <class Key>
-TileIntegrator<Key> map_tile(const RatedStore& store, const TileGrid<Key>& grid, const TileCoord& c,
-                             unsigned threads = 1, std::size_t memory_limit = 0,
-                             const std::function<void(std::size_t, std::size_t)>& progress = {}) {
+TileIntegrator<Key> map_tiles(const RatedStore& store, const TileGrid<Key>& grid,
+                              const TileBox& box, unsigned threads = 1,
+                              std::size_t memory_limit = 0,
+                              const std::function<void(std::size_t, std::size_t)>& progress = {}) {
   if (store.key_bits() != Key::depth)
     throw io::Error(store.dir(), "rated keyframes of " + std::to_string(store.key_bits()) +
                                      "-bit keys, not " + std::to_string(Key::depth));
-  const KeyBounds<Key> b = grid.bounds(c);
-  TileIntegrator<Key> tile(store.resolution(), store.params(), b, threads);
-  tile.map().set_memory_limit(memory_limit);
+  const KeyBounds<Key> b{grid.bounds(box.lo).lo, grid.bounds(box.hi).hi};
+  TileIntegrator<Key> tiles(store.resolution(), store.params(), b, threads);
+  tiles.map().set_memory_limit(memory_limit);
   const std::vector<std::size_t> which =
       store.reaching({b.lo[0], b.lo[1], b.lo[2], b.hi[0], b.hi[1], b.hi[2]});
   RatedKeyframe rk;
   for (std::size_t j = 0; j < which.size(); ++j) {
     store.load(which[j], rk);
-    tile.integrate(rk);
+    tiles.integrate(rk);
     if (progress) progress(j + 1, which.size());
   }
-  return tile;
+  return tiles;
+}
+
+/// Tile `c` of the run in `store` alone (what one process of a cluster maps): map_tiles of it.
+template <class Key>
+TileIntegrator<Key> map_tile(const RatedStore& store, const TileGrid<Key>& grid, const TileCoord& c,
+                             unsigned threads = 1, std::size_t memory_limit = 0,
+                             const std::function<void(std::size_t, std::size_t)>& progress = {}) {
+  return map_tiles(store, grid, TileBox{c, c}, threads, memory_limit, progress);
 }
 
 /// What describes a run in its tile set's index besides its tiles.
@@ -86,8 +108,60 @@ TileSetIndex start_index(const RatedStore& store, int depth, const RunDescriptio
   return ix;
 }
 
-/// Maps every tile `store`'s run reaches at `depth` into `dir`, one tile at a time, and writes
-/// the index (tiles that end up empty are left out). progress(tiles done, of).
+namespace detail {
+
+// Maps the tiles `coords` (inside `box`) together and writes them; when they do not fit
+// `memory_limit` together, the box is halved along its longest side and each half done alone.
+template <class Key>
+void write_tile_group(const RatedStore& store, const std::string& dir, const TileGrid<Key>& grid,
+                      std::vector<TileCoord> coords, unsigned threads, std::size_t memory_limit,
+                      std::vector<TileEntry>& out, std::size_t& done,
+                      const std::function<void(std::size_t)>& tiles_done) {
+  if (coords.empty()) return;
+  TileBox box{coords[0], coords[0]};
+  for (const TileCoord& c : coords)
+    for (int a = 0; a < 3; ++a) {
+      box.lo.t[a] = std::min(box.lo.t[a], c.t[a]);
+      box.hi.t[a] = std::max(box.hi.t[a], c.t[a]);
+    }
+  std::vector<TileEntry> written;
+  try {
+    const TileIntegrator<Key> group = map_tiles(store, grid, box, threads, memory_limit);
+    written = write_tiles_of(group.map(), dir, grid);
+  } catch (const std::bad_alloc&) {  // MemoryLimitError too
+    if (coords.size() == 1)
+      throw io::Error((std::filesystem::path(dir) / TileGrid<Key>::file_name(coords[0])).string(),
+                      "the tile's map needs more than its memory limit of " +
+                          std::to_string(memory_limit / 1000000) +
+                          " MB; cut the map into smaller tiles (a deeper tile depth)");
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+      if (box.hi.t[a] - box.lo.t[a] > box.hi.t[axis] - box.lo.t[axis]) axis = a;
+    const std::int64_t mid = box.lo.t[axis] + (box.hi.t[axis] - box.lo.t[axis] + 1) / 2;
+    std::vector<TileCoord> low, high;
+    for (const TileCoord& c : coords) (c.t[axis] < mid ? low : high).push_back(c);
+    if (low.empty() || high.empty()) {  // the tiles differ on another axis only: split them
+      low.assign(coords.begin(), coords.begin() + static_cast<std::ptrdiff_t>(coords.size() / 2));
+      high.assign(coords.begin() + static_cast<std::ptrdiff_t>(coords.size() / 2), coords.end());
+    }
+    write_tile_group(store, dir, grid, std::move(low), threads, memory_limit, out, done,
+                     tiles_done);
+    write_tile_group(store, dir, grid, std::move(high), threads, memory_limit, out, done,
+                     tiles_done);
+    return;
+  }
+  out.insert(out.end(), written.begin(), written.end());
+  done += coords.size();
+  if (tiles_done) tiles_done(done);
+}
+
+}  // namespace detail
+
+/// Maps every tile `store`'s run reaches at `depth` into `dir` and writes the index (tiles that
+/// end up empty are left out). The tiles are mapped together as far as `memory_limit` allows (0:
+/// all at once): a group of tiles is one clipped map, its scans from inside it walked whole; a
+/// group whose map passes the limit is halved and each half mapped alone, down to single tiles
+/// (one tile that does not fit is an io::Error naming it). progress(tiles done, of).
 template <class Key>
 TileSetIndex write_tile_set(const RatedStore& store, const std::string& dir, int depth,
                             const RunDescription& run, unsigned threads = 1,
@@ -96,11 +170,14 @@ TileSetIndex write_tile_set(const RatedStore& store, const std::string& dir, int
   const TileGrid<Key> grid(depth);
   TileSetIndex ix = start_index<Key>(store, depth, run);
   const std::vector<TileCoord> tiles = tiles_reached(store, grid);
-  for (std::size_t i = 0; i < tiles.size(); ++i) {
-    const TileIntegrator<Key> tile = map_tile(store, grid, tiles[i], threads, memory_limit);
-    if (!tile.map().empty()) ix.tiles.push_back(write_tile(dir, grid, tiles[i], tile.map()));
-    if (progress) progress(i + 1, tiles.size());
-  }
+  std::size_t done = 0;
+  detail::write_tile_group(store, dir, grid, tiles, threads, memory_limit, ix.tiles, done,
+                           [&](std::size_t n) {
+                             if (progress) progress(n, tiles.size());
+                           });
+  std::sort(ix.tiles.begin(), ix.tiles.end(), [&](const TileEntry& a, const TileEntry& b) {
+    return grid.morton(a.coord) < grid.morton(b.coord);
+  });
   write_index(dir, ix);
   return ix;
 }

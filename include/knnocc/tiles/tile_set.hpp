@@ -311,33 +311,31 @@ TileEntry write_tile(const std::string& dir, const TileGrid<Key>& grid, const Ti
     corner[a] = static_cast<std::uint32_t>(e.keys[a] - e.shift[a]);
   const io::detail::OctreeNode bt =
       io::detail::OctreeEncoder<false, false, Key>(map, "", {}, e.shift)
-          .encode_node(grid.depth(), corner);
+          .encode_node(grid.depth(), corner, false);
   io::detail::OctreeEncoder<true, false, Key> ot_encoder(map, note, {}, e.shift);
   const io::detail::OctreeNode ot = ot_encoder.encode_node(grid.depth(), corner);
   e.bt = TileNodeInfo{bt.nodes, bt.summary.leaf, bt.summary.value};
   e.ot = TileNodeInfo{ot.nodes, ot.summary.leaf, ot.summary.value};
-  // The tile's file: the path from the root to the tile's node (one child each), then the node.
-  std::string path_bytes;
-  for (int d = 0; d < grid.depth(); ++d) {
+  // The tile's file: the path from the root to the tile's node (one child each, the tile's value),
+  // then the node.
+  std::string head = ot_encoder.header(ot.present ? grid.depth() + ot.nodes : 0);
+  for (int d = 0; ot.present && d < grid.depth(); ++d) {
     const int bit = 15 - d;
     const unsigned child = ((corner[0] >> bit) & 1u) | (((corner[1] >> bit) & 1u) << 1) |
                            (((corner[2] >> bit) & 1u) << 2);
-    io::detail::OctreeNodeSummary above;
-    above.value = ot.summary.value;
-    char head[5];
-    io::detail::store_le(head, above.value);
-    head[4] = static_cast<char>(1u << child);
-    path_bytes.append(head, 5);
+    char node[5];
+    io::detail::store_le(node, ot.summary.value);
+    node[4] = static_cast<char>(1u << child);
+    head.append(node, 5);
   }
-  const std::string bytes = ot.present
-                                ? ot_encoder.header(grid.depth() + ot.nodes) + path_bytes + ot.data
-                                : ot_encoder.header(0);
   io::detail::Sha256 h;
-  h.update(bytes);
+  h.update(head);
+  h.update(ot.data);
   e.sha256 = h.hex();
-  e.bytes = bytes.size();
+  e.bytes = head.size() + ot.data.size();
   io::AtomicFile f((std::filesystem::path(dir) / e.file).string());
-  f.write(bytes);
+  f.write(head);
+  f.write(ot.data);
   f.commit();
   return e;
 }

@@ -20,6 +20,7 @@
 #include "../../map/detail/brick_access.hpp"
 #include "../../map/occupancy_map.hpp"
 #include "../../raycast/detail/scan_bitmap.hpp"
+#include "collect.hpp"
 #include "hashed_marks.hpp"
 #include "hit_codes.hpp"
 #include "thread_scratch.hpp"
@@ -99,11 +100,23 @@ struct ScanValues {
   bool rated = false;
 };
 
+/// Whether brick (bx, by, bz) (brick coordinates) lies in `clip` (null: no clip). A clip is a
+/// tile, whose edges are whole bricks: a brick lies in it or outside it.
+inline bool brick_in_clip(const KeyBox* clip, std::int64_t bx, std::int64_t by, std::int64_t bz) {
+  if (!clip) return true;
+  const std::int64_t k[3] = {bx << kBrickBits, by << kBrickBits, bz << kBrickBits};
+  for (int a = 0; a < 3; ++a)
+    if (k[a] < clip->lo[a] || k[a] > clip->hi[a]) return false;
+  return true;
+}
+
 /// Gathers the touched bricks of the threads' dense bitmaps (each thread's hit and miss maps of
 /// the same box) into `out`, clearing the bitmaps: groups of brick rows, taken by the team's
-/// threads in turn (rows differ, so threads share no words).
+/// threads in turn (rows differ, so threads share no words). Bricks outside `clip` (when given)
+/// are cleared and left out.
 template <class Key>
-void gather_dense(Team& team, ThreadScratches& scratch, BrickGroups& out) {
+void gather_dense(Team& team, ThreadScratches& scratch, BrickGroups& out,
+                  const KeyBox* clip = nullptr) {
   using layout = BrickLayout<Key>;
   const unsigned threads = team.size();
   const ScanBitmap& shape = scratch[0]->hit;  // every bitmap has the scan's box
@@ -139,6 +152,12 @@ void gather_dense(Team& team, ThreadScratches& scratch, BrickGroups& out) {
           VoxelMask& h = mine.row_hit[static_cast<std::size_t>(bx)];
           VoxelMask& m = mine.row_miss[static_cast<std::size_t>(bx)];
           if (!h.any() && !m.any()) continue;
+          if (!brick_in_clip(clip, (lo[0] >> kBrickBits) + bx, (lo[1] >> kBrickBits) + by,
+                             (lo[2] >> kBrickBits) + bz)) {
+            h.clear();
+            m.clear();
+            continue;
+          }
           out.groups[g].push_back(
               {layout::pack_brick((lo[0] >> kBrickBits) + bx, (lo[1] >> kBrickBits) + by,
                                   (lo[2] >> kBrickBits) + bz),
@@ -162,10 +181,11 @@ void gather_dense(Team& team, ThreadScratches& scratch, BrickGroups& out) {
 /// updated at once, in z, y, x order. With `codes` the hits come from s.hit_list (HitCodes, sorted
 /// here into s.hit_rows) instead of the hit bitmap. A fresh map first gets room for every touched
 /// brick (counted in a pass that leaves the scratch as it is), as apply_updates gives it. The same
-/// map, pool order and counts as the two-step path.
+/// map, pool order and counts as the two-step path. Bricks outside `clip` (when given) are
+/// cleared and left out.
 template <class Key>
 UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const ScanValues& values,
-                                bool codes = false) {
+                                bool codes = false, const KeyBox* clip = nullptr) {
   using layout = BrickLayout<Key>;
   BrickWriter<Key> writer(map);
   ScanBitmap& hit = s.hit;
@@ -191,7 +211,7 @@ UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const 
     s.hit_codes.for_row(sorted, static_cast<std::size_t>(bz * nby + by),
                         [&](std::size_t bx, int local) { row_hit[bx].set(local); });
   };
-  if (map.num_bricks() == 0) {  // a fresh map: all are new
+  if (map.num_bricks() == 0 && !clip) {  // a fresh map: all are new
     // Per brick row, which bricks the rows of each bitmap touch (the codes' bricks added to the
     // miss bitmap's), then how many.
     const bool alike = codes || hit.row_words() == miss.row_words();  // both bits
@@ -232,6 +252,12 @@ UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const 
         VoxelMask& h = row_hit[bx];
         VoxelMask& m = row_miss[bx];
         if (!h.any() && !m.any()) continue;
+        if (!brick_in_clip(clip, (lo[0] >> kBrickBits) + bx, (lo[1] >> kBrickBits) + by,
+                           (lo[2] >> kBrickBits) + bz)) {
+          h.clear();
+          m.clear();
+          continue;
+        }
         const std::uint32_t slot = writer.brick_slot(layout::pack_brick(
             (lo[0] >> kBrickBits) + bx, (lo[1] >> kBrickBits) + by, (lo[2] >> kBrickBits) + bz));
         for (std::size_t i = 0; i < m.w.size(); ++i) m.w[i] &= ~h.w[i];  // hit wins
@@ -263,11 +289,12 @@ UpdateCounts apply_dense_serial(OccupancyMap<Key>& map, ThreadScratch& s, const 
 /// thread's scratch keeps its bricks until the apply has read them. With a memory limit (`limit`
 /// > 0; `elsewhere`: the bytes counted against it outside the threads' hashed scratch, `order`
 /// and `slots`) the first thread's scratch may grow to what the others leave, and `order` and
-/// `slots` are refused (MemoryLimitError) before they grow past it.
+/// `slots` are refused (MemoryLimitError) before they grow past it. Bricks outside `clip` (when
+/// given) are left out of `order`.
 template <class Key>
 void order_hashed(ThreadScratches& scratch, unsigned threads, std::vector<std::uint32_t>& order,
                   std::vector<std::uint32_t>& slots, std::size_t limit = 0,
-                  std::size_t elsewhere = 0) {
+                  std::size_t elsewhere = 0, const KeyBox* clip = nullptr) {
   using layout = BrickLayout<Key>;
   HashedMarks& first = scratch[0]->hashed;
   const auto lists = [&] { return (order.capacity() + slots.capacity()) * sizeof(std::uint32_t); };
@@ -289,15 +316,19 @@ void order_hashed(ThreadScratches& scratch, unsigned threads, std::vector<std::u
     if (slots.capacity() < n) more += n * sizeof(std::uint32_t);
     if (held + more > limit) memory_limit_exceeded(limit, held + more);
   }
-  order.clear();
-  for (std::size_t j = 0; j < n; ++j) order.push_back(static_cast<std::uint32_t>(j));
   auto zyx = [&](std::uint32_t j) {
     const auto o = layout::origin_of(first[j].coord);
     return std::array<std::int64_t, 3>{o[2], o[1], o[0]};
   };
+  order.clear();
+  for (std::size_t j = 0; j < n; ++j) {
+    const auto o = zyx(static_cast<std::uint32_t>(j));
+    if (brick_in_clip(clip, o[2] >> kBrickBits, o[1] >> kBrickBits, o[0] >> kBrickBits))
+      order.push_back(static_cast<std::uint32_t>(j));
+  }
   std::sort(order.begin(), order.end(),
             [&](std::uint32_t a, std::uint32_t b) { return zyx(a) < zyx(b); });
-  slots.resize(n);
+  slots.resize(order.size());
 }
 
 /// Creates the missing map bricks in group order (serially: the map's value pool is serial), then

@@ -4,25 +4,28 @@
 // voxel inside the box gets exactly the update the whole scan gives it; no voxel outside is
 // touched.
 //
-// After phase 1 (collect) each thread's part keeps the hits inside the box, with their log-odds,
-// and sorts its rays by the keys they can visit. OctoMap's walk steps every axis monotonically from
+// After phase 1 (collect) each thread's part keeps the hits inside the box, with their log-odds.
+// A scan whose origin lies inside a box of whole bricks (a tile) walks its rays whole, as
+// unclipped, and the apply leaves out the bricks outside the box. Otherwise the rays are sorted by
+// the keys they can visit: OctoMap's walk steps every axis monotonically from
 // the origin voxel towards the end voxel; float rounding may carry an axis one voxel past the end
 // voxel (the dense box of a scan keeps the same one-voxel margin), never more. So a ray visits
 // only keys in the box of its origin and end voxels grown by one voxel, and is
 //   - dropped when that box misses the clip (it cannot touch the tile),
 //   - walked as usual when that box lies inside the clip (it cannot leave the tile),
-//   - else a crossing ray: walked alone, from the origin exactly as the whole scan walks it,
-//     marking only the voxels inside the clip, and stopped once it has left the clip for good
-//     (after entering it, or when it has passed the clip on an axis it moves along).
-// Its keys are the whole walk's keys by construction; only the part before it enters the clip is
-// walked without marking.
+//   - else a crossing ray: moved to its first voxel inside the clip with the exact state the walk
+//     has there (jump_to_entry, without walking the voxels before it), walked on marking the
+//     voxels inside, and stopped once it has left the clip for good.
+// Its keys are the whole walk's keys by construction.
 
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "../../core/grid.hpp"
+#include "../../map/brick.hpp"
 #include "../../raycast/dda.hpp"
 #include "../../raycast/detail/linear_ray.hpp"
 #include "collect.hpp"
@@ -37,28 +40,56 @@ inline bool box_contains(const KeyBox& b, const std::int64_t (&k)[3]) {
 /// How a ray from `origin` to the voxel `end` relates to `clip`.
 enum class RayClip { outside, inside, crossing };
 
+/// `past`: how far the walk may go past the end voxel, 1 or 0 (an end point clear of its voxel's
+/// borders, end_point_clear: the walk then ends on the end voxel). The walk never moves back past
+/// the origin voxel.
 inline RayClip classify_ray(const std::int32_t (&origin)[3], const std::int32_t (&end)[3],
-                            const KeyBox& clip) {
+                            const KeyBox& clip, int past = 1) {
   bool inside = true;
   for (int a = 0; a < 3; ++a) {
-    const std::int64_t lo = std::int64_t{std::min(origin[a], end[a])} - 1;
-    const std::int64_t hi = std::int64_t{std::max(origin[a], end[a])} + 1;
+    const std::int64_t o = origin[a], e = end[a];
+    const std::int64_t lo = e < o ? e - past : e == o ? o - past : o;
+    const std::int64_t hi = e > o ? e + past : e == o ? o + past : o;
     if (hi < clip.lo[a] || lo > clip.hi[a]) return RayClip::outside;
     inside = inside && lo >= clip.lo[a] && hi <= clip.hi[a];
   }
   return inside ? RayClip::inside : RayClip::crossing;
 }
 
+/// end_point_clear() for a collected ray: its walk ends on its end voxel, never past it.
+template <class Key>
+bool end_clear(const ScanOrigin& o, const RayEnd& r, double inv_resolution) {
+  const double length = octomap_norm(r.end.x - o.point.x, r.end.y - o.point.y, r.end.z - o.point.z);
+  const double margin = end_margin(length * inv_resolution);
+  const float e[3] = {r.end.x, r.end.y, r.end.z};
+  for (int a = 0; a < 3; ++a) {
+    const double f = inv_resolution * static_cast<double>(e[a]) -
+                     static_cast<double>(r.key[a] - static_cast<std::int32_t>(Key::center));
+    if (!(f > margin && f < 1.0 - margin)) return false;
+  }
+  return true;
+}
+
+/// Whether a box's edges are whole bricks (a tile's are).
+inline bool brick_aligned(const KeyBox& b) {
+  constexpr std::int64_t m = kBrickEdge - 1;
+  for (int a = 0; a < 3; ++a)
+    if ((b.lo[a] & m) != 0 || ((b.hi[a] + 1) & m) != 0) return false;
+  return true;
+}
+
 /// Restricts one thread's collected part to `clip`: the hits inside it (with their log-odds, in
-/// point order), the rays that stay inside it; the crossing rays are appended to `crossing`. The
-/// part's key box and steps are those of what it keeps, the crossing rays' keys within the clip
-/// included (so the dense box holds every voxel a crossing ray marks).
+/// point order). When the scan's origin lies inside a clip of whole bricks every ray is kept and
+/// walked whole, the scan as fast as unclipped (the apply then leaves out the bricks outside the
+/// clip). Otherwise the rays that cannot reach the clip are dropped, those that cannot leave it
+/// kept, and the rest appended to `crossing`: each is walked alone from its first voxel inside the
+/// clip (jump_to_entry). The part's key box and steps are those of what it keeps.
 template <class Key>
 void clip_part(ScanPart& part, const ScanOrigin& o, const KeyBox& clip,
-               std::vector<RayEnd>& crossing) {
-  KeyBox box = KeyBox::empty<Key>();
+               std::vector<RayEnd>& crossing, double inv_resolution) {
   std::size_t kept = 0;
   const bool rated = !part.hit_logodds.empty();
+  KeyBox box = KeyBox::empty<Key>();
   for (std::size_t i = 0; i < part.hits.size(); ++i) {
     const Key k = Key::unpack(part.hits[i]);
     const std::int64_t key[3] = {k[0], k[1], k[2]};
@@ -69,31 +100,38 @@ void clip_part(ScanPart& part, const ScanOrigin& o, const KeyBox& clip,
   }
   part.hits.set_end(part.hits.data() + kept);
   if (rated) part.hit_logodds.resize(kept);
+  const std::int64_t origin[3] = {o.key[0], o.key[1], o.key[2]};
+  if (o.in_range && box_contains(clip, origin) && brick_aligned(clip))
+    return;  // the whole scan, its box as collected
 
+  // A crossing ray of a clip of whole bricks is walked on from its entry voxel to its end (the
+  // apply leaves out the bricks past the clip): its box runs from the clip to its end voxel.
+  const bool whole_rest = brick_aligned(clip);
   std::size_t steps = 0;
   kept = 0;
   RayEnd* rays = part.rays.data();
   for (std::size_t i = 0; i < part.rays.size(); ++i) {
     const RayEnd& r = rays[i];
-    const RayClip c = classify_ray(o.key, r.key, clip);
+    const RayClip c =
+        classify_ray(o.key, r.key, clip, end_clear<Key>(o, r, inv_resolution) ? 0 : 1);
     if (c == RayClip::outside) continue;
     std::int64_t lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(o.key[a], r.key[a]);
-      hi[a] = std::max(o.key[a], r.key[a]);
+      const std::int64_t e = r.key[a];
+      lo[a] = std::max<std::int64_t>(std::min<std::int64_t>(o.key[a], e) - 1,
+                                     whole_rest ? std::min(clip.lo[a], e - 1) : clip.lo[a]);
+      hi[a] = std::min<std::int64_t>(std::max<std::int64_t>(o.key[a], e) + 1,
+                                     whole_rest ? std::max(clip.hi[a], e + 1) : clip.hi[a]);
+      lo[a] = std::max<std::int64_t>(lo[a], 0);
+      hi[a] = std::min<std::int64_t>(hi[a], Key::extent - 1);
       steps += static_cast<std::size_t>(hi[a] - lo[a]);
-      if (c == RayClip::crossing) {
-        lo[a] = std::max(lo[a] - 1, clip.lo[a]);
-        hi[a] = std::min(hi[a] + 1, clip.hi[a]);
-      }
     }
     box.extend(lo);
     box.extend(hi);
-    if (c == RayClip::crossing) {
+    if (c == RayClip::crossing)
       crossing.push_back(r);
-      continue;
-    }
-    rays[kept++] = r;
+    else
+      rays[kept++] = r;
   }
   part.rays.set_end(rays + kept);
   part.box = box;
@@ -126,11 +164,116 @@ struct CrossingVisit {
   }
 };
 
+/// Where a walk that starts outside a box first enters it.
+enum class Entry {
+  walk,    ///< walk from the origin (it starts inside, or the entry is at its very end)
+  jumped,  ///< the state and position were moved to the first voxel inside
+  never,   ///< the walk ends before it enters
+};
+
+/// Moves a walk standing on its origin voxel (`s`, `at`) to its first voxel inside `clip`, with
+/// the state walk_ray() would have there, without walking the voxels before it.
+///
+/// walk_ray() steps, each time, the axis with the smallest t_max (the higher axis on ties), and
+/// an axis' t_max after j of its steps is its start value plus t_delta added j times, in order,
+/// in double. So the walk is the merge of three sequences of step events ordered by
+/// (t, higher axis first). The walk enters the box at the latest of the axes' entering events;
+/// at that event each other axis has taken exactly its events that come before it in that order,
+/// which its own sequence alone tells. The sums are the walk's own, added in the same order, so
+/// the state is bit for bit the walked one. Where the end voxel's countdown could matter (the
+/// entry is at or past as many steps as the ray has), Entry::walk leaves the walk to walk_ray.
+inline Entry jump_to_entry(WalkState& s, KeyPosition& at, const KeyBox& clip) {
+  std::int64_t first[3], last[3];  // steps of each axis at which it is inside the box
+  bool inside = true;
+  for (int a = 0; a < 3; ++a) {
+    const std::int64_t k = at.k[a], d = at.dir[a];
+    if (k >= clip.lo[a] && k <= clip.hi[a]) {
+      first[a] = 0;
+      last[a] = d > 0   ? clip.hi[a] - k
+                : d < 0 ? k - clip.lo[a]
+                        : std::numeric_limits<std::int64_t>::max();
+      continue;
+    }
+    inside = false;
+    if (d > 0 && k < clip.lo[a]) {
+      first[a] = clip.lo[a] - k;
+      last[a] = clip.hi[a] - k;
+    } else if (d < 0 && k > clip.hi[a]) {
+      first[a] = k - clip.hi[a];
+      last[a] = k - clip.lo[a];
+    } else {
+      return Entry::never;  // moving away, or not moving, outside the box on this axis
+    }
+  }
+  if (inside) return Entry::walk;
+  // The entering event of each axis that starts outside: its first[a]-th step, at the t_max it
+  // had after first[a] - 1 steps; the walk enters at the latest of them.
+  double t[3];
+  int entry = -1;
+  double when = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    t[a] = s.t_max[a];
+    if (first[a] == 0) continue;
+    for (std::int64_t j = 1; j < first[a]; ++j) t[a] += s.t_delta[a];
+    if (entry < 0 || t[a] > when || (t[a] == when && a < entry)) {
+      entry = a;
+      when = t[a];
+    }
+  }
+  if (!(when <= s.length)) return Entry::never;  // the walk ends before that event
+  // Every other axis: the steps whose event comes before the entering one.
+  std::int64_t steps = 0, n[3];
+  for (int a = 0; a < 3; ++a) {
+    if (a == entry) {
+      n[a] = first[a];
+      t[a] += s.t_delta[a];
+    } else {
+      if (first[a] > 0) {  // t[a] holds its value after first[a] - 1 steps: continue from there
+        n[a] = first[a] - 1;
+      } else {
+        n[a] = 0;
+        t[a] = s.t_max[a];
+      }
+      while (t[a] < when || (t[a] == when && a > entry)) {
+        t[a] += s.t_delta[a];
+        ++n[a];
+      }
+      if (n[a] > last[a]) return Entry::never;  // this axis has left the box already
+    }
+    steps += n[a];
+  }
+  if (steps >= s.steps_to_end) {
+    // The countdown reaches the end voxel's step first (or at the entry): standing on the end
+    // voxel then ends the walk before it marks anything inside; otherwise (rounding carried it past
+    // the end voxel) the walk is left to walk_ray.
+    bool at_end = steps == s.steps_to_end;
+    for (int a = 0; a < 3 && at_end; ++a) at_end = at.k[a] + at.dir[a] * n[a] == at.end[a];
+    return at_end ? Entry::never : Entry::walk;
+  }
+  for (int a = 0; a < 3; ++a) {
+    at.k[a] += at.dir[a] * n[a];
+    s.t_max[a] = t[a];
+  }
+  s.steps_to_end -= steps;
+  if (std::min(std::min(t[0], t[1]), t[2]) > s.length) return Entry::never;  // the entry ends it
+  return Entry::jumped;
+}
+
 /// A crossing ray's walk from its origin voxel (already set up in `at`, `state`); returns the
 /// voxels marked.
 template <class Key, class Mark>
 std::size_t walk_clipped(const WalkState& state, KeyPosition at, const KeyBox& clip, Mark& mark) {
   CrossingVisit<Key, Mark> visit{clip, mark};
+  WalkState s = state;
+  switch (jump_to_entry(s, at, clip)) {
+    case Entry::never:
+      return 0;
+    case Entry::jumped:  // the first voxel inside, then the walk from there
+      if (visit(at)) walk_ray(s, at, visit);
+      return visit.visits;
+    case Entry::walk:
+      break;
+  }
   if (visit(at)) walk_ray(state, at, visit);  // the origin voxel, then the walk
   return visit.visits;
 }

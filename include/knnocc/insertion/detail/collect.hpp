@@ -125,10 +125,10 @@ struct ScanPart {
 
 /// What phase 1 hands to the next phases: the parts' totals.
 struct CollectedScan {
-  KeyBox box;             ///< key box of origin, ray ends and hits over all parts
-  std::size_t steps = 0;  ///< sum of |end - origin|_1 over all rays
-  std::size_t rays = 0;   ///< rays over all parts
-  std::size_t hits = 0;   ///< hits over all parts
+  KeyBox box;                ///< key box of origin, ray ends and hits over all parts
+  std::size_t steps = 0;     ///< sum of |end - origin|_1 over all rays
+  std::size_t rays = 0;      ///< rays over all parts
+  std::size_t hits = 0;      ///< hits over all parts
   std::size_t crossing = 0;  ///< clipped scans: rays walked alone (clip.hpp), not in `rays`
   PointCounts counts;
 };

@@ -11,16 +11,17 @@ if(NOT _rc EQUAL 0)
   message(FATAL_ERROR "cmake --install --component python failed")
 endif()
 set(_dir "${PREFIX}/${INSTALL_DIR}")
-file(GLOB _module "${_dir}/knnocc.*.so" "${_dir}/knnocc*.pyd")
-if(NOT _module OR NOT EXISTS "${_dir}/knnocc.pyi")
-  message(FATAL_ERROR "no module and stub in ${_dir}")
+file(GLOB _module "${_dir}/knnocc/_knnocc.*.so" "${_dir}/knnocc/_knnocc*.pyd")
+if(NOT _module OR NOT EXISTS "${_dir}/knnocc/__init__.pyi" OR NOT EXISTS "${_dir}/knnocc/dask/__main__.py")
+  message(FATAL_ERROR "no package (module, stub, knnocc.dask) in ${_dir}")
 endif()
 execute_process(
   COMMAND "${CMAKE_COMMAND}" -E env --unset=PYTHONPATH "${PYTHON}" -c "
 import sys
 sys.path.insert(0, '${_dir}')
-import knnocc, numpy as np
+import knnocc, knnocc.dask, numpy as np
 assert knnocc.__file__.startswith('${_dir}'), knnocc.__file__
+assert knnocc.OccupancyMap.__module__ == 'knnocc', knnocc.OccupancyMap.__module__
 m = knnocc.OccupancyMap(0.1)
 m.insert_point_cloud(np.array([[1.0, 0.0, 0.0]]), (0, 0, 0))
 assert m.count_voxels() == (1, 9), m.count_voxels()

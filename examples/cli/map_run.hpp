@@ -33,24 +33,7 @@ struct MapInput {
   bool colors = true;         ///< false: --no-color
 };
 
-/// Drops the points farther than `crop` from the sensor (sensor frame), with their ids, colours
-/// and SLAM counters.
-inline void crop_cloud(io::Cloud& c, double crop) {
-  if (!(crop > 0.0)) return;
-  std::size_t kept = 0;
-  for (std::size_t j = 0; j < c.points.size(); ++j) {
-    const Point3f& p = c.points[j];
-    if (!(std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= crop)) continue;
-    if (!c.ids.empty()) c.ids[kept] = c.ids[j];
-    if (!c.colors.empty()) c.colors[kept] = c.colors[j];
-    if (!c.evidence.empty()) c.evidence[kept] = c.evidence[j];
-    c.points[kept++] = p;
-  }
-  c.points.resize(kept);
-  if (!c.ids.empty()) c.ids.resize(kept);
-  if (!c.colors.empty()) c.colors.resize(kept);
-  if (!c.evidence.empty()) c.evidence.resize(kept);
-}
+using io::crop_cloud;  // --crop (io/cloud.hpp)
 
 /// Refuses a cloud of which fewer than 10 % of the finite points lie within the key range in
 /// their own coordinates: whatever the pose, such a cloud is in other units or one of its

@@ -96,25 +96,35 @@ inline double sensor_reach(const io::ScanSource& source, std::size_t first, std:
   return reach;
 }
 
-/// --key-bits: given, or 21 when the sensors travel beyond 16-bit keys' range (a note says so;
-/// without --out-tiles that is refused: a .bt/.ot holds 16-bit keys only).
+/// --key-bits: given, or 16 unless the sensors travel beyond 16-bit keys' range: then 21 for a
+/// tile set, with a note; a map in one process (one .bt/.ot holds 16-bit keys only) keeps 16 bits
+/// and a note says that the points beyond are skipped and what maps them.
 inline int choose_key_bits(const Args& args, const MapOptions& opt, bool tiles) {
   const std::string given = args.str("--key-bits");
   if (given == "16" || given == "21") return given == "21" ? 21 : 16;
-  const io::ScanSource source = io::ScanSource::open(opt.input);
+  if (!(opt.res > 0)) return 16;  // --init-map: the map file's own keys
+  double reach = 0.0;
+  try {
+    const io::ScanSource source = io::ScanSource::open(opt.input);
+    reach = sensor_reach(source, opt.first, last_cloud(opt, source));
+  } catch (const std::exception&) {
+    return 16;  // the run itself says what is wrong with the input
+  }
   const double margin = opt.crop > 0 ? opt.crop : opt.max_range > 0 ? opt.max_range : 0.0;
-  const double reach = sensor_reach(source, opt.first, last_cloud(opt, source)) + margin,
-               range = 32768.0 * opt.res;
-  if (reach < range) return 16;
-  char text[400];
+  const double range = 32768.0 * opt.res;
+  if (reach + margin < range) return 16;
+  char text[300];
   std::snprintf(text, sizeof text,
                 "the sensor travels %.1f m from the origin, beyond the +-%.1f m of OctoMap's "
                 "16-bit keys at --res %g",
-                reach - margin, range, opt.res);
-  if (!tiles)
-    throw io::Error(opt.input, std::string(text) +
-                                   ": map it as a tile set (--out-tiles DIR), which takes 21-bit "
-                                   "keys, or at a coarser --res");
+                reach, range, opt.res);
+  if (!tiles) {
+    std::fprintf(stderr,
+                 "knnocc map: %s: note: %s: points there are skipped (--out-tiles DIR maps them "
+                 "with 21-bit keys)\n",
+                 opt.input.c_str(), text);
+    return 16;
+  }
   std::fprintf(stderr, "knnocc map: %s: %s: mapping with 21-bit keys (--key-bits 21)\n",
                opt.input.c_str(), text);
   return 21;

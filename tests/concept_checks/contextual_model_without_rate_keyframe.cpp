@@ -7,6 +7,6 @@ struct Model {
   float miss_logodds() const { return -0.4f; }
   template <class Key, class Tracker>
   void settle_keyframe(const knnocc::KeyframeView<Key, Tracker>&,
-                       const std::vector<knnocc::EndpointRating>&, knnocc::OccupancyMap<Key>&) {}
+                       const std::vector<knnocc::EndpointRating>&, std::vector<knnocc::MapEdit>&) {}
 };
 int main() { knnocc::Mapper<Model> mapper(0.1); }

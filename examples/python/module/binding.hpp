@@ -22,6 +22,7 @@ void bind_map(py::module_& m);
 void bind_mappers(py::module_& m);
 void bind_io(py::module_& m);
 void bind_knn2022(py::module_& m);
+void bind_tiles(py::module_& m);
 
 /// The buffer the last PointsIn of this thread read and whether it had to be converted: what
 /// knnocc._last_points_input() tells the tests that prove inputs are read in place.

@@ -1,6 +1,7 @@
 // Python's Mapper (one keyframe at a time, paper Alg. 3, any of the four models) and LiveMapper
 // (keyframes added, re-posed and removed under SLAM corrections; the map stays exact).
 
+#include <algorithm>
 #include <deque>
 #include <string>
 #include <utility>
@@ -72,8 +73,7 @@ bool knn2022_option(Knn2022Params& p, const std::string& key, py::handle v, bool
 
 // The keyword arguments of Mapper / LiveMapper for `model`; ValueError for a model or a
 // parameter it does not take, TypeError for a value of the wrong type.
-ModelOptions options_in(const char* cls, const std::string& model, const py::kwargs& kw,
-                        bool live) {
+ModelOptions options_in(const char* cls, const std::string& model, const py::dict& kw, bool live) {
   const bool octomap = model == "octomap", knn = model == "knn", robust = model == "robust",
              knn2022 = model == "knn2022";
   if (!(octomap || knn || ((robust || knn2022) && !live)))
@@ -242,9 +242,75 @@ knnocc.to_world). The OctoMap model replays only the keyframes that see the chan
 k-NN model rebuilds (its statistics change every later rating).
 )";
 
+// The rating pass of a run (knnocc.dask): as `knnocc map --out-tiles` rates the scans, into the
+// folder `rated`; the run's totals and the model's statistics.
+py::dict rate_sequence(const std::string& sequence, const std::string& rated, double resolution,
+                       const std::string& model, int key_bits, double crop, bool world_points,
+                       std::size_t first, const py::object& count, const py::kwargs& kw) {
+  if (key_bits != 16 && key_bits != 21) throw py::value_error("key_bits must be 16 or 21");
+  py::dict params;
+  bool first_pass = model == "knn2022";
+  for (const auto& item : kw) {
+    const std::string key = py::str(item.first);
+    if (key == "stats") {
+      const std::string v = py::str(item.second);
+      if (v != "first-pass" && v != "online")
+        throw py::value_error("stats must be 'first-pass' or 'online', got '" + v + "'");
+      first_pass = model == "knn2022" && v == "first-pass";
+    } else {
+      params[item.first] = item.second;
+    }
+  }
+  if (params.contains("mu")) first_pass = false;  // the caller's statistics
+  ModelOptions o = options_in("rate", model, params, false);
+  const io::ScanSource source = io::ScanSource::open(sequence);
+  if (first >= source.size()) throw py::value_error("first is past the sequence's end");
+  const std::size_t last =
+      count.is_none()
+          ? source.size()
+          : first + std::min<std::size_t>(count.cast<std::size_t>(), source.size() - first);
+  std::vector<double> ms;
+  tiles::RatingTotals t;
+  TrackerStats stats;
+  {
+    const py::gil_scoped_release nogil;
+    if (first_pass)
+      o.knn2022 = knn2022_first_pass(source, o.knn2022, crop, world_points, first, last);
+    o.knn2022.fixed_statistics = o.knn2022.fixed_statistics || first_pass;
+    const bool wide = key_bits == 21;
+    const std::shared_ptr<MapperOwner> mapper =
+        model == "octomap"   ? make_octomap_mapper(resolution, o, wide)
+        : model == "knn"     ? make_knn_mapper(resolution, o, wide)
+        : model == "knn2022" ? make_knn2022_mapper(resolution, o, wide)
+                             : make_robust_mapper(resolution, o, wide);
+    t = mapper->rate_sequence(source, rated, crop, world_points, first, last, ms);
+    stats = mapper->statistics();
+  }
+  py::dict d = stats_out(stats);
+  d["clouds"] = t.clouds;
+  d["points"] = t.points;
+  d["nonfinite"] = t.nonfinite;
+  d["out_of_range"] = t.out_of_range;
+  d["rated"] = t.rated;
+  d["rays"] = t.rays;
+  d["first"] = first;
+  std::sort(ms.begin(), ms.end());
+  d["median_keyframe_ms"] = ms.empty() ? 0.0 : ms[ms.size() / 2];
+  if (model == "knn2022") {
+    d["mu"] = o.knn2022.mu;
+    d["sigma"] = o.knn2022.sigma;
+  }
+  return d;
+}
+
 }  // namespace
 
 void bind_mappers(py::module_& m) {
+  m.def("_rate_sequence", &rate_sequence, py::arg("sequence"), py::arg("rated"),
+        py::arg("resolution"), py::arg("model"), py::arg("key_bits") = 16, py::arg("crop") = -1.0,
+        py::arg("world_points") = false, py::arg("first") = 0, py::arg("count") = py::none(),
+        "For knnocc.dask: the rating pass of `knnocc map --out-tiles` into the folder `rated` "
+        "(rated.txt and one .rkf per scan); the run's totals.");
   py::class_<MapperRef> mapper(m, "Mapper", (std::string(kMapperDoc) + kParamsDoc).c_str());
   mapper.def(py::init([](double resolution, const std::string& model, const py::object& wide_obj,
                          const py::kwargs& kw) {
@@ -265,7 +331,8 @@ void bind_mappers(py::module_& m) {
       "Whether the map has 21-bit keys (Mapper(..., wide=True)).");
   mapper.def(
       "write_tiles",
-      [](const MapperRef& self, const std::string& path, int tile_depth) {
+      [](const MapperRef& self, const py::object& path_obj, int tile_depth) {
+        const std::string path = path_in(path_obj);
         const auto lock = self.owner->guard.read("Mapper.write_tiles");
         const py::gil_scoped_release nogil;
         return self.owner->write_tiles(path, tile_depth);

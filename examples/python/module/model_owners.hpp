@@ -8,6 +8,9 @@
 #include <utility>
 #include <vector>
 
+#include <knnocc/io/trajectory.hpp>
+#include <knnocc/tiles/rating_pass.hpp>
+
 #include "owners.hpp"
 
 namespace knnocc::python {
@@ -54,6 +57,17 @@ class MapperOf final : public MapperOwner {
   }
   std::size_t write_tiles(const std::string& dir, int depth) const override {
     return write_map_tiles(mapper_.map(), mapper_.integration(), name_, dir, depth);
+  }
+  tiles::RatingTotals rate_sequence(const io::ScanSource& source, const std::string& rated,
+                                    double crop, bool world_points, std::size_t first,
+                                    std::size_t last, std::vector<double>& rating_ms) override {
+    tiles::RatedStoreWriter<Key> out(rated, mapper_.map().resolution());
+    auto prepare = [&](io::Scan& scan, std::size_t) {
+      if (world_points) io::transform_to_sensor(scan.pose, scan.cloud.points);
+      io::crop_cloud(scan.cloud, crop);
+    };
+    auto rated_one = [&](std::size_t, const KeyframeStats&, double ms) { rating_ms.push_back(ms); };
+    return tiles::rate_sequence(source, first, last, mapper_, out, prepare, rated_one);
   }
 
  private:

@@ -1,6 +1,8 @@
 // The authors' 2022 model (Miao et al., Sensors 22(1):139): Mapper only, as the tool (the live
 // mapper does not take it), and its first pass over a sequence for mu and sigma.
 
+#include <knnocc/io/scan_source.hpp>
+#include <knnocc/io/trajectory.hpp>
 #include <knnocc/sensor/knn2022_model.hpp>
 
 #include "binding.hpp"
@@ -12,6 +14,26 @@ namespace knnocc::python {
 std::shared_ptr<MapperOwner> make_knn2022_mapper(double resolution, const ModelOptions& o,
                                                  bool wide) {
   return make_mapper_of(resolution, Knn2022Model(o.knn2022), o.mapper, wide, "knn2022");
+}
+
+Knn2022Params knn2022_first_pass(const io::ScanSource& source, const Knn2022Params& p, double crop,
+                                 bool world_points, std::size_t first, std::size_t last) {
+  Knn2022FirstPass pass(p);
+  std::vector<Point3f> f;
+  std::vector<Point3d> d;
+  for (std::size_t i = first; i < last; ++i) {
+    io::Scan scan = source.load(i);
+    if (world_points) io::transform_to_sensor(scan.pose, scan.cloud.points);
+    io::crop_cloud(scan.cloud, crop);
+    if (io::is_identity(scan.pose))
+      f.swap(scan.cloud.points);
+    else
+      io::transform_to_world(scan.pose, scan.cloud.points, f);
+    d.clear();
+    for (const Point3f& q : f) d.push_back(Point3d{q.x, q.y, q.z});
+    pass.add(Point3d{scan.pose.t.x(), scan.pose.t.y(), scan.pose.t.z()}, d);
+  }
+  return pass.params();
 }
 
 namespace {

@@ -171,9 +171,13 @@ MapObject& MapRef::writable(const char* what) const {
 
 }  // namespace knnocc::python
 
-PYBIND11_MODULE(knnocc, m) {
+// The compiled part of the package knnocc (examples/python/knnocc/__init__.py imports it).
+// Its classes and functions say they belong to `knnocc`, where users (and pickles) find them.
+PYBIND11_MODULE(_knnocc, m) {
   namespace py = pybind11;
   using namespace knnocc::python;
+  const py::object own_name = m.attr("__name__");
+  m.attr("__name__") = "knnocc";
   m.doc() = R"(knnocc: 3D occupancy mapping (OctoMap's model bit for bit, the k-NN model, the robust
 model), numpy in and numpy out, on the header-only C++ library.
 
@@ -224,10 +228,12 @@ limit MemoryError.)";
   bind_mappers(m);
   bind_io(m);
   bind_knn2022(m);
+  bind_tiles(m);
 
   m.def(
       "_last_points_input",
       [] { return py::make_tuple(last_points_input.address, last_points_input.converted); },
       "For tests: (address, converted) of the last point array this thread passed in: the "
       "address of the buffer the library read, and whether the input had to be converted.");
+  m.attr("__name__") = own_name;
 }

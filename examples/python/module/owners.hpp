@@ -19,11 +19,13 @@
 #include <knnocc/core/log_odds.hpp>
 #include <knnocc/core/point3.hpp>
 #include <knnocc/core/point_evidence.hpp>
+#include <knnocc/io/scan_source.hpp>
 #include <knnocc/live/live_mapper.hpp>
 #include <knnocc/map/occupancy_map.hpp>
 #include <knnocc/mapper.hpp>
 #include <knnocc/sensor/knn2022_model.hpp>
 #include <knnocc/sensor/knn_model.hpp>
+#include <knnocc/tiles/rated_store.hpp>
 
 #include "../../cli/eigen_pose.hpp"
 #include "guard.hpp"
@@ -101,6 +103,13 @@ class MapperOwner : public MapOwner {
   virtual bool wide() const = 0;
   /// The map as a tile set in the new folder `dir` (tiles at `depth`); returns the tiles.
   virtual std::size_t write_tiles(const std::string& dir, int depth) const = 0;
+  /// The rating pass of `knnocc map --out-tiles` (tiles/rating_pass.hpp) over scans [first,
+  /// last) of `source` into the folder of rated keyframes `rated`, each scan prepared as the tool
+  /// prepares it (world-frame points moved into the sensor frame, then --crop); this mapper's
+  /// map stays empty. `rating_ms` gets each keyframe's rating time.
+  virtual tiles::RatingTotals rate_sequence(const io::ScanSource& source, const std::string& rated,
+                                            double crop, bool world_points, std::size_t first,
+                                            std::size_t last, std::vector<double>& rating_ms) = 0;
 };
 std::shared_ptr<MapperOwner> make_octomap_mapper(double resolution, const ModelOptions& o,
                                                  bool wide);
@@ -109,6 +118,12 @@ std::shared_ptr<MapperOwner> make_robust_mapper(double resolution, const ModelOp
                                                 bool wide);
 std::shared_ptr<MapperOwner> make_knn2022_mapper(double resolution, const ModelOptions& o,
                                                  bool wide);
+
+/// The 2022 model's first pass over scans [first, last) of `source`, each prepared and moved to
+/// the world frame as `knnocc map --model knn2022` does (its default --stats first-pass): `p`
+/// with the statistics filled in.
+Knn2022Params knn2022_first_pass(const io::ScanSource& source, const Knn2022Params& p, double crop,
+                                 bool world_points, std::size_t first, std::size_t last);
 
 /// A map of 21-bit keys at OctoMap's keys (std::domain_error naming its extent when it reaches
 /// beyond them).

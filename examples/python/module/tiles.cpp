@@ -1,10 +1,19 @@
-// Tile sets from Python: a Mapper's map written as one (Mapper.write_tiles; docs/tiles.md).
+// Tile sets from Python: a Mapper's map written as one (Mapper.write_tiles; docs/tiles.md), the
+// pieces knnocc.dask runs on a cluster (rated keyframes, one tile, the index) and merge_tiles.
+
+#include <algorithm>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include <knnocc/io/atomic_file.hpp>
 #include <knnocc/tiles/tile_grid.hpp>
+#include <knnocc/tiles/tile_mapping.hpp>
+#include <knnocc/tiles/tile_merge.hpp>
 #include <knnocc/tiles/tile_set.hpp>
 
-#include "owners.hpp"
+#include "binding.hpp"
 
 namespace knnocc::python {
 
@@ -32,5 +41,182 @@ template std::size_t write_map_tiles<OcKey>(const OccupancyMap<OcKey>&, const In
 template std::size_t write_map_tiles<WideKey>(const OccupancyMap<WideKey>&,
                                               const IntegrationParams&, const std::string&,
                                               const std::string&, int);
+
+}  // namespace knnocc::python
+
+namespace knnocc::python {
+
+namespace {
+
+py::dict node_out(const tiles::TileNodeInfo& n) {
+  py::dict d;
+  d["nodes"] = n.nodes;
+  d["leaf"] = n.leaf;
+  d["value"] = n.value;
+  return d;
+}
+tiles::TileNodeInfo node_in(const py::dict& d) {
+  return tiles::TileNodeInfo{d["nodes"].cast<std::uint64_t>(), d["leaf"].cast<bool>(),
+                             d["value"].cast<float>()};
+}
+
+py::dict entry_out(const tiles::TileEntry& e) {
+  py::dict d;
+  d["coord"] = py::make_tuple(e.coord.t[0], e.coord.t[1], e.coord.t[2]);
+  d["file"] = e.file;
+  d["shift"] = py::make_tuple(e.shift[0], e.shift[1], e.shift[2]);
+  d["keys"] = py::make_tuple(e.keys[0], e.keys[1], e.keys[2], e.keys[3], e.keys[4], e.keys[5]);
+  d["occupied"] = e.occupied;
+  d["free"] = e.free;
+  d["bt"] = node_out(e.bt);
+  d["ot"] = node_out(e.ot);
+  d["bytes"] = e.bytes;
+  d["sha256"] = e.sha256;
+  return d;
+}
+std::vector<std::int64_t> integers(const py::handle& h, std::size_t n) {
+  const py::tuple t = py::reinterpret_borrow<py::object>(h).cast<py::tuple>();
+  if (t.size() != n) throw py::value_error("a bad tile entry");
+  std::vector<std::int64_t> out;
+  for (const py::handle v : t) out.push_back(v.cast<std::int64_t>());
+  return out;
+}
+
+tiles::TileEntry entry_in(const py::dict& d) {
+  tiles::TileEntry e;
+  const auto c = integers(d["coord"], 3), s = integers(d["shift"], 3), k = integers(d["keys"], 6);
+  for (std::size_t a = 0; a < 3; ++a) {
+    e.coord.t[a] = c[a];
+    e.shift[a] = s[a];
+  }
+  for (std::size_t a = 0; a < 6; ++a) e.keys[a] = k[a];
+  e.file = d["file"].cast<std::string>();
+  e.occupied = d["occupied"].cast<std::uint64_t>();
+  e.free = d["free"].cast<std::uint64_t>();
+  e.bt = node_in(d["bt"].cast<py::dict>());
+  e.ot = node_in(d["ot"].cast<py::dict>());
+  e.bytes = d["bytes"].cast<std::uint64_t>();
+  e.sha256 = d["sha256"].cast<std::string>();
+  return e;
+}
+
+template <class Key>
+std::vector<TileCoord> reached(const tiles::RatedStore& store, int depth) {
+  return tiles::tiles_reached(store, TileGrid<Key>(depth));
+}
+
+// One tile mapped from the rated keyframes and written; nullopt for a tile left empty.
+template <class Key>
+std::optional<tiles::TileEntry> map_one(const tiles::RatedStore& store, const std::string& dir,
+                                        int depth, const TileCoord& c, std::size_t memory_limit,
+                                        unsigned threads) {
+  const TileGrid<Key> grid(depth);
+  if (!grid.valid(c)) throw std::invalid_argument("tile outside the key range");
+  try {
+    const TileIntegrator<Key> tile = tiles::map_tile(store, grid, c, threads, memory_limit);
+    if (tile.map().empty()) return std::nullopt;
+    return tiles::write_tile(dir, grid, c, tile.map());
+  } catch (const MemoryLimitError&) {
+    throw io::Error((std::filesystem::path(dir) / TileGrid<Key>::file_name(c)).string(),
+                    "the tile's map needs more than its memory limit of " +
+                        std::to_string(memory_limit / 1000000) +
+                        " MB; cut the map into smaller tiles (a deeper tile depth)");
+  }
+}
+
+template <class Key>
+void write_index_of(const tiles::RatedStore& store, const std::string& dir, int depth,
+                    const tiles::RunDescription& run, std::vector<tiles::TileEntry> entries) {
+  tiles::TileSetIndex ix = tiles::start_index<Key>(store, depth, run);
+  const TileGrid<Key> grid(depth);
+  std::sort(entries.begin(), entries.end(), [&](const auto& a, const auto& b) {
+    return grid.morton(a.coord) < grid.morton(b.coord);
+  });
+  ix.tiles = std::move(entries);
+  tiles::write_index(dir, ix);
+}
+
+}  // namespace
+
+void bind_tiles(py::module_& m) {
+  m.def(
+      "_tiles_reached",
+      [](const std::string& rated, int depth) {
+        std::vector<TileCoord> coords;
+        {
+          const py::gil_scoped_release nogil;
+          const tiles::RatedStore store = tiles::RatedStore::open(rated);
+          coords = store.key_bits() == 16 ? reached<OcKey>(store, depth)
+                                          : reached<WideKey>(store, depth);
+        }
+        py::list out;
+        for (const TileCoord& c : coords) out.append(py::make_tuple(c.t[0], c.t[1], c.t[2]));
+        return out;
+      },
+      py::arg("rated"), py::arg("depth"),
+      "For knnocc.dask: the tiles the rated keyframes in `rated` reach, in the order of "
+      "OctoMap's files.");
+  m.def(
+      "_map_tile",
+      [](const std::string& rated, const std::string& dir, int depth, const py::object& coord,
+         std::size_t memory_limit, unsigned threads) -> py::object {
+        const std::vector<std::int64_t> xyz = integers(coord, 3);
+        const TileCoord c{{xyz[0], xyz[1], xyz[2]}};
+        std::optional<tiles::TileEntry> e;
+        {
+          const py::gil_scoped_release nogil;
+          const tiles::RatedStore store = tiles::RatedStore::open(rated);
+          e = store.key_bits() == 16
+                  ? map_one<OcKey>(store, dir, depth, c, memory_limit, threads)
+                  : map_one<WideKey>(store, dir, depth, c, memory_limit, threads);
+        }
+        if (!e) return py::none();
+        return entry_out(*e);
+      },
+      py::arg("rated"), py::arg("dir"), py::arg("depth"), py::arg("coord"),
+      py::arg("memory_limit") = 0, py::arg("threads") = 1,
+      "For knnocc.dask: tile `coord` mapped from the rated keyframes in `rated` and written into "
+      "`dir`; its index entry (a dict), or None for a tile left empty.");
+  m.def(
+      "_write_tile_index",
+      [](const std::string& dir, const std::string& rated, int depth, const std::string& model,
+         const std::string& model_options, const std::string& source, std::uint64_t first,
+         std::uint64_t count, const py::list& entries) {
+        std::vector<tiles::TileEntry> list;
+        for (const py::handle h : entries) list.push_back(entry_in(h.cast<py::dict>()));
+        const py::gil_scoped_release nogil;
+        const tiles::RatedStore store = tiles::RatedStore::open(rated);
+        const tiles::RunDescription run{model, model_options, source, first, count};
+        if (store.key_bits() == 16)
+          write_index_of<OcKey>(store, dir, depth, run, std::move(list));
+        else
+          write_index_of<WideKey>(store, dir, depth, run, std::move(list));
+      },
+      py::arg("dir"), py::arg("rated"), py::arg("depth"), py::arg("model"),
+      py::arg("model_options"), py::arg("source"), py::arg("first"), py::arg("count"),
+      py::arg("entries"), "For knnocc.dask: the index of a tile set from its tiles' entries.");
+  m.def(
+      "merge_tiles",
+      [](const py::object& dir_obj, const py::object& out_obj, std::size_t memory_limit) {
+        const std::string dir = path_in(dir_obj), out = path_in(out_obj);
+        const std::string e = std::filesystem::path(out).extension().string();
+        if (e != ".bt" && e != ".ot")
+          throw py::value_error("merge_tiles: " + out + ": the name must end in .bt or .ot");
+        tiles::MergeStats st;
+        {
+          const py::gil_scoped_release nogil;
+          st = tiles::merge_tile_set(dir, out, e == ".bt", memory_limit);
+        }
+        py::dict d;
+        d["tiles"] = st.tiles;
+        d["nodes"] = st.nodes;
+        d["bytes"] = st.bytes;
+        return d;
+      },
+      py::arg("path"), py::arg("out"), py::arg("memory_limit") = 0,
+      R"(Joins the tile set in the folder `path` into one OctoMap file `out` (.bt or .ot), streamed
+as `knnocc merge` does: byte for byte the one-process map's file. knnocc.Error for a damaged
+tile set or one beyond OctoMap's key range; {'tiles', 'nodes', 'bytes'} written.)");
+}
 
 }  // namespace knnocc::python

@@ -2,6 +2,7 @@
 #pragma once
 // The in-memory point cloud every reader in knnocc::io returns.
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -24,5 +25,25 @@ struct Cloud {
   // otherwise.
   std::vector<PointEvidence> evidence;
 };
+
+/// Drops the points farther than `crop` from the sensor (the cloud in the sensor frame; the
+/// distance in double), with their ids, colours and SLAM counters: `knnocc map --crop`, the
+/// paper's "keep points within 4 m". crop <= 0 (or NaN): nothing dropped.
+inline void crop_cloud(Cloud& c, double crop) {
+  if (!(crop > 0.0)) return;
+  std::size_t kept = 0;
+  for (std::size_t j = 0; j < c.points.size(); ++j) {
+    const Point3f& p = c.points[j];
+    if (!(std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z) <= crop)) continue;
+    if (!c.ids.empty()) c.ids[kept] = c.ids[j];
+    if (!c.colors.empty()) c.colors[kept] = c.colors[j];
+    if (!c.evidence.empty()) c.evidence[kept] = c.evidence[j];
+    c.points[kept++] = p;
+  }
+  c.points.resize(kept);
+  if (!c.ids.empty()) c.ids.resize(kept);
+  if (!c.colors.empty()) c.colors.resize(kept);
+  if (!c.evidence.empty()) c.evidence.resize(kept);
+}
 
 }  // namespace knnocc::io

@@ -135,7 +135,7 @@ Cost cost(const Options& o, const std::string& name, const std::string& input, d
   const std::string base = o.out + "/cost_" + name, dir = base + "_tiles", r = std::to_string(res);
   fs::remove_all(dir);
   Cost c;
-  c.direct = tool(o, {"map", "-i", input, "--res", r, "--key-bits", "21", "-o", base + ".ot"});
+  c.direct = tool(o, {"map", "-i", input, "--res", r, "-o", base + ".ot"});
   c.tiled = tool(o, {"map", "-i", input, "--res", r, "--out-tiles", dir, "--tile-depth",
                      std::to_string(depth), "--keep-rated"});
   c.merge = tool(o, {"merge", dir, "-o", base + "_m.ot"});
@@ -167,9 +167,12 @@ void one_tile(const Options& o, const std::string& name, const Cost& c) {
   };
   const auto [r, peak] = knnocc::bench::in_child([&] {
     const knnocc::tiles::RatedStore store = knnocc::tiles::RatedStore::open(dir + "/rated");
-    const knnocc::TileGrid<knnocc::WideKey> grid(ix.tile_depth);
-    const auto tile = knnocc::tiles::map_tile(store, grid, largest.coord);
-    return Result{double(tile.map().memory_usage()) / 1e6};
+    const auto map_mb = [&](auto key) {  // the tile set's own key width
+      const knnocc::TileGrid<decltype(key)> grid(ix.tile_depth);
+      const auto tile = knnocc::tiles::map_tile(store, grid, largest.coord);
+      return double(tile.map().memory_usage()) / 1e6;
+    };
+    return Result{ix.key_bits == 16 ? map_mb(knnocc::OcKey{}) : map_mb(knnocc::WideKey{})};
   });
   std::printf(
       "  %-6s largest tile of %zu alone: peak %.1f MB (its map %.1f MB), x%.3f of the "

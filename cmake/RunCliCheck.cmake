@@ -6,13 +6,15 @@
 #   -DSTDERR_REGEX=<re>      optional: stderr must match
 #   -DWRITE_FILE=<path> -DWRITE_CONTENT=<text>   optional: input file created first
 #   -DEXPECT_FILE=<path>     optional: must exist afterwards (removed first); a|b for several
-#   -DNO_FILE=<path>         optional: must not exist afterwards, nor <path>.tmp (removed first)
+#   -DNO_FILE=<path>         optional: must not exist afterwards, nor <path>.tmp (removed first);
+#                            a|b for several (files or folders)
 #   -DSAME_FILES=<a>|<b>     optional: the two files must be byte for byte identical
 #   -DCLEAN_DIR=<path>       optional: a folder removed first (outputs that refuse a non-empty one)
 #   -DFILE_REGEX=<path>|<re> optional: the file (read as text) must match <re>
 string(REPLACE "|" ";" _args "${ARGS}")
 string(REPLACE "|" ";" _expect_files "${EXPECT_FILE}")
-foreach(_f IN LISTS _expect_files ITEMS "${NO_FILE}")
+string(REPLACE "|" ";" _no_files "${NO_FILE}")
+foreach(_f IN LISTS _expect_files _no_files)
   if(_f)
     file(REMOVE "${_f}" "${_f}.tmp")
   endif()
@@ -40,9 +42,11 @@ foreach(_f IN LISTS _expect_files)
     message(FATAL_ERROR "expected output file ${_f} was not written")
   endif()
 endforeach()
-if(NO_FILE AND (EXISTS "${NO_FILE}" OR EXISTS "${NO_FILE}.tmp"))
-  message(FATAL_ERROR "${NO_FILE} (or its temporary) exists after a failed run")
-endif()
+foreach(_f IN LISTS _no_files)
+  if(EXISTS "${_f}" OR EXISTS "${_f}.tmp")
+    message(FATAL_ERROR "${_f} (or its temporary) exists after a failed run")
+  endif()
+endforeach()
 if(SAME_FILES)
   string(REPLACE "|" ";" _pair "${SAME_FILES}")
   execute_process(COMMAND "${CMAKE_COMMAND}" -E compare_files ${_pair} RESULT_VARIABLE _same)

@@ -230,6 +230,13 @@ TEST_CASE("tile set: a damaged tile set is one io::Error naming the file, nothin
     const tiles::TileSetIndex ix = tiles::read_index(dir);
     REQUIRE(ix.tiles.size() > 4);
     d.apply(dir, ix);
+    // What `knnocc info` checks: every tile read, and its trees against the index.
+    const auto check_all = [&dir] {
+      const tiles::TileSetIndex now = tiles::read_index(dir);
+      for (const tiles::TileEntry& e : now.tiles)
+        tiles::check_tile_nodes(dir, now, e, tiles::read_tile<OcKey>(dir, now, e));
+    };
+    CHECK_THROWS_WITH_AS(check_all(), doctest::Contains(d.message), io::Error);
     for (const bool binary : {true, false}) {
       const std::string out = dir + (binary ? ".bt" : ".ot");
       test::write_file(out, "old");

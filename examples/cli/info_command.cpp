@@ -173,9 +173,9 @@ int info_tile_set(const std::string& dir) {
       hi[a] = i == 0 ? h : std::max(hi[a], h);
     }
     if (ix.key_bits == 16)
-      (void)tiles::read_tile<OcKey>(dir, ix, t);
+      tiles::check_tile_nodes(dir, ix, t, tiles::read_tile<OcKey>(dir, ix, t));
     else
-      (void)tiles::read_tile<WideKey>(dir, ix, t);
+      tiles::check_tile_nodes(dir, ix, t, tiles::read_tile<WideKey>(dir, ix, t));
     progress.update(i + 1);
   }
   progress.finish();

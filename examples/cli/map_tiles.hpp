@@ -1,8 +1,10 @@
 #pragma once
 // knnocc map --out-tiles DIR: the run as a tile set (include/knnocc/tiles/, docs/tiles.md). Every
 // scan is rated once, in order, into a folder of rated keyframes inside the staged output; then
-// each tile the keyframes reach is mapped from the keyframes that reach it and written, one tile's
-// map in memory at a time; the index is written last and the folder committed as a whole. Maps
+// the tiles the keyframes reach are mapped, as many at once as the memory limit allows, each from
+// the keyframes that reach it, and written; the index is written last, the -o files are merged
+// from the staged tiles, and the folder is committed as a whole. Coloured clouds: the tiles keep
+// no colours (plain OcTrees; a note says so). Maps
 // beyond OctoMap's 16-bit key range use 21-bit keys (--key-bits 21, or chosen from the poses).
 
 #include <algorithm>
@@ -83,19 +85,6 @@ inline int depth_for_tile_size(double metres, double res, int key_bits) {
   return depth;
 }
 
-/// The farthest a sensor of the scans [first, last) of `source` goes from the origin along an axis
-/// (sequence folders and scan graphs; 0 for a point file), from the poses alone.
-inline double sensor_reach(const io::ScanSource& source, std::size_t first, std::size_t last) {
-  double reach = 0.0;
-  if (const io::Sequence* seq = source.sequence())
-    for (std::size_t i = first; i < last && i < seq->size(); ++i)
-      reach = std::max(reach, seq->pose(i).t.cwiseAbs().maxCoeff());
-  if (const io::ScanGraph* g = source.graph())
-    for (std::size_t i = first; i < last && i < g->nodes.size(); ++i)
-      reach = std::max(reach, g->nodes[i].pose.t.cwiseAbs().maxCoeff());
-  return reach;
-}
-
 /// --key-bits: given, or 16 unless the sensors travel beyond 16-bit keys' range: then 21 for a
 /// tile set, with a note; a map in one process (one .bt/.ot holds 16-bit keys only) keeps 16 bits
 /// and a note says that the points beyond are skipped and what maps them.
@@ -106,7 +95,7 @@ inline int choose_key_bits(const Args& args, const MapOptions& opt, bool tiles) 
   double reach = 0.0;
   try {
     const io::ScanSource source = io::ScanSource::open(opt.input);
-    reach = sensor_reach(source, opt.first, last_cloud(opt, source));
+    reach = io::sensor_reach(source, opt.first, last_cloud(opt, source));
   } catch (const std::exception&) {
     return 16;  // the run itself says what is wrong with the input
   }
@@ -175,7 +164,8 @@ namespace detail {
 // The rating pass into `rated`; returns its totals (for the summary) and fills `totals`.
 template <class Model, class Key>
 tiles::RatingTotals rate_run(const MapOptions& opt, Mapper<Model, Key>& rater,
-                             const std::string& rated, MapRun& run, MapTotals& totals) {
+                             const std::string& rated, MapRun& run, MapTotals& totals,
+                             bool& coloured) {
   const io::ScanSource source = io::ScanSource::open(opt.input);
   const std::size_t last = last_cloud(opt, source);
   tiles::RatedStoreWriter<Key> writer(rated, opt.res);
@@ -184,6 +174,7 @@ tiles::RatingTotals rate_run(const MapOptions& opt, Mapper<Model, Key>& rater,
   auto prepare = [&](io::Scan& scan, std::size_t i) {
     at = i;
     run.prepare(scan, rater.map().grid(), source_path_for_errors(opt.input, i));
+    if (!scan.cloud.colors.empty()) coloured = true;
     if constexpr (std::is_same_v<Model, RobustModel>)
       if (scan.cloud.ids.empty()) run.note_missing_ids();
   };
@@ -214,8 +205,13 @@ tiles::RatingTotals rate_run(const MapOptions& opt, Mapper<Model, Key>& rater,
 inline void merge_outputs(const MapOptions& opt, const std::string& dir,
                           std::vector<std::string>& written) {
   for (const MapFile& f : opt.files) {
-    tiles::merge_tile_set(dir, f.path, f.format == MapFormat::bt,
-                          map_memory_share(opt.memory_limit));
+    try {
+      tiles::merge_tile_set(dir, f.path, f.format == MapFormat::bt,
+                            map_memory_share(opt.memory_limit));
+    } catch (const io::Error& e) {
+      if (e.file() != dir) throw;
+      throw io::Error(f.path, e.problem());  // not the staged folder's name: the file asked for
+    }
     written.push_back(f.path);
   }
 }
@@ -235,7 +231,8 @@ int run_map_tiles(const MapOptions& opt, const Model& model, const TileOptions& 
   Mapper<Model, Key> rater(opt.res, model, mo);
   MapRun run(opt.scans, opt.res);
   MapTotals totals;
-  detail::rate_run(opt, rater, rated, run, totals);
+  bool coloured = false;
+  detail::rate_run(opt, rater, rated, run, totals, coloured);
   const tiles::RatedStore store = tiles::RatedStore::open(rated);
   const tiles::RunDescription what{model_name(model), model_options, opt.input, opt.first,
                                    totals.clouds};
@@ -248,9 +245,20 @@ int run_map_tiles(const MapOptions& opt, const Model& model, const TileOptions& 
       });
   progress.finish();
   if (!t.keep_rated) std::filesystem::remove_all(rated);
-  staging.commit();
   std::vector<std::string> written{t.dir};
-  detail::merge_outputs(opt, t.dir, written);
+  {
+    // The merged files are written before the tile set is committed and renamed after it: a merge
+    // that fails (a map beyond OctoMap's key range, a file that cannot be written) leaves nothing.
+    io::CommitGroup group;
+    detail::merge_outputs(opt, staging.path(), written);
+    staging.commit();
+    group.commit();
+  }
+  if (coloured && opt.scans.colors)
+    std::fprintf(stderr,
+                 "knnocc map: %s: note: the clouds have colours; a tile set keeps none (plain "
+                 "OcTrees; without --out-tiles an .ot is a ColorOcTree)\n",
+                 opt.input.c_str());
   note_skipped_points(opt.input, totals.scan.nonfinite, totals.scan.out_of_range,
                       rater.map().grid().max_coord(), rater.map().grid().resolution());
   note_empty_map(opt.input, totals.clouds, totals.scan.points, ix.occupied() + ix.free(), model);

@@ -115,6 +115,50 @@ def test_bad_input_stops_the_run_naming_the_file_and_leaves_nothing(client, tmp_
         knnocc.dask.map_sequence(client, str(seq), res=0.1, model="knn", out=str(out), kk=3)
 
 
+def far_sequence(folder, x):
+    """Two scans of a wall 2 m ahead, the second taken `x` metres from the first."""
+    import struct
+    (folder / "clouds").mkdir(parents=True)
+    (folder / "poses.txt").write_text(f"0 0 0 0 0 0 0 1\n1 {x} 0 0 0 0 0 1\n")  # t x y z q
+    points = [(2.0, 0.1 * i, 0.1 * j) for i in range(-5, 6) for j in range(-5, 6)]
+    body = b"".join(struct.pack("<3f", *p) for p in points)
+    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(points)}\n"
+              "property float x\nproperty float y\nproperty float z\nend_header\n").encode()
+    for i in range(2):
+        (folder / "clouds" / f"{i:06d}.ply").write_bytes(header + body)
+    return folder
+
+
+def test_outputs_are_all_or_nothing_and_no_folder_is_guessed(client, tmp_path):
+    # Without out_tiles nothing is written beside the map but the map: a folder named after it
+    # is left alone.
+    seq = far_sequence(tmp_path / "near", 10.0)
+    mine = tmp_path / "m.bt.tiles"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("mine")
+    s = knnocc.dask.map_sequence(client, str(seq), res=0.1, out=str(tmp_path / "m.bt"),
+                                 quiet=True)
+    assert s["key_bits"] == 16 and (tmp_path / "m.bt").stat().st_size > 0
+    assert (mine / "notes.txt").read_text() == "mine"
+    # Upper-case extensions are OctoMap files too.
+    knnocc.dask.map_sequence(client, str(seq), res=0.1, out=str(tmp_path / "UP.BT"), quiet=True)
+    assert (tmp_path / "UP.BT").read_bytes() == (tmp_path / "m.bt").read_bytes()
+    # A map beyond OctoMap's key range is mapped with 21-bit keys (from the poses, as the tool
+    # decides); merging it into one .bt is refused, and then neither the tile set nor the file
+    # is written.
+    far = far_sequence(tmp_path / "far", 4000.0)
+    from knnocc import _knnocc
+    assert _knnocc._sensor_reach(str(far)) == 4000.0
+    out, tiles = tmp_path / "far.bt", tmp_path / "far_tiles"
+    with pytest.raises(knnocc.Error, match="key range|beyond"):
+        knnocc.dask.map_sequence(client, str(far), res=0.1, out=str(out), out_tiles=str(tiles),
+                                 quiet=True)
+    assert not out.exists() and not tiles.exists()
+    assert not [p for p in tmp_path.iterdir() if ".tmp-" in p.name or ".discard" in p.name]
+    s = knnocc.dask.map_sequence(client, str(far), res=0.1, out_tiles=str(tiles), quiet=True)
+    assert s["key_bits"] == 21 and s["tiles"] >= 2 and (tiles / "index.txt").is_file()
+
+
 def test_a_tile_larger_than_its_memory_is_refused_with_a_message(client, tmp_path):
     out = tmp_path / "small.bt"
     with pytest.raises(knnocc.Error, match="needs more than its memory limit"):

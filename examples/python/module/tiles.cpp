@@ -2,12 +2,14 @@
 // pieces knnocc.dask runs on a cluster (rated keyframes, one tile, the index) and merge_tiles.
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <knnocc/io/atomic_file.hpp>
+#include <knnocc/io/scan_source.hpp>
 #include <knnocc/tiles/tile_grid.hpp>
 #include <knnocc/tiles/tile_mapping.hpp>
 #include <knnocc/tiles/tile_merge.hpp>
@@ -196,16 +198,51 @@ void bind_tiles(py::module_& m) {
       py::arg("model_options"), py::arg("source"), py::arg("first"), py::arg("count"),
       py::arg("entries"), "For knnocc.dask: the index of a tile set from its tiles' entries.");
   m.def(
+      "_sensor_reach",
+      [](const std::string& sequence, std::size_t first, const py::object& count) {
+        const py::gil_scoped_release nogil;
+        const io::ScanSource source = io::ScanSource::open(sequence);
+        std::size_t last = source.size();
+        if (!count.is_none()) {
+          const py::gil_scoped_acquire gil;
+          last = std::min(last, first + count.cast<std::size_t>());
+        }
+        return io::sensor_reach(source, first, last);
+      },
+      py::arg("sequence"), py::arg("first") = 0, py::arg("count") = py::none(),
+      "For knnocc.dask: the farthest the sensor goes from the origin along an axis (poses of a "
+      "sequence folder or scan graph; 0 for a point file), as `knnocc map` decides key bits.");
+  m.def(
       "merge_tiles",
       [](const py::object& dir_obj, const py::object& out_obj, std::size_t memory_limit) {
-        const std::string dir = path_in(dir_obj), out = path_in(out_obj);
-        const std::string e = std::filesystem::path(out).extension().string();
-        if (e != ".bt" && e != ".ot")
-          throw py::value_error("merge_tiles: " + out + ": the name must end in .bt or .ot");
+        const std::string dir = path_in(dir_obj);
+        std::vector<std::string> outs;
+        if (py::isinstance<py::list>(out_obj) || py::isinstance<py::tuple>(out_obj)) {
+          for (const py::handle h : out_obj)
+            outs.push_back(path_in(py::reinterpret_borrow<py::object>(h)));
+        } else {
+          outs.push_back(path_in(out_obj));
+        }
+        std::vector<bool> binary;
+        for (const std::string& out : outs) {
+          std::string e = std::filesystem::path(out).extension().string();
+          for (char& ch : e) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+          if (e != ".bt" && e != ".ot")
+            throw py::value_error("merge_tiles: " + out + ": the name must end in .bt or .ot");
+          binary.push_back(e == ".bt");
+        }
         tiles::MergeStats st;
         {
           const py::gil_scoped_release nogil;
-          st = tiles::merge_tile_set(dir, out, e == ".bt", memory_limit);
+          io::CommitGroup group;  // every file written before any is renamed into place
+          for (std::size_t i = 0; i < outs.size(); ++i) {
+            const tiles::MergeStats one =
+                tiles::merge_tile_set(dir, outs[i], binary[i], memory_limit);
+            st.tiles = one.tiles;
+            st.nodes = one.nodes;
+            st.bytes += one.bytes;
+          }
+          group.commit();
         }
         py::dict d;
         d["tiles"] = st.tiles;
@@ -215,8 +252,10 @@ void bind_tiles(py::module_& m) {
       },
       py::arg("path"), py::arg("out"), py::arg("memory_limit") = 0,
       R"(Joins the tile set in the folder `path` into one OctoMap file `out` (.bt or .ot), streamed
-as `knnocc merge` does: byte for byte the one-process map's file. knnocc.Error for a damaged
-tile set or one beyond OctoMap's key range; {'tiles', 'nodes', 'bytes'} written.)");
+as `knnocc merge` does: byte for byte the one-process map's file. `out` may be a list (one .bt
+and one .ot, say): all are written before any replaces a file. knnocc.Error for a damaged tile
+set or one beyond OctoMap's key range, and then no file is written; {'tiles', 'nodes', 'bytes'}
+(bytes of all files written).)");
 }
 
 }  // namespace knnocc::python

@@ -9,6 +9,7 @@
 //                          sensor frame and the viewpoint places the sensor in the world)
 // Scans load one at a time (a .graph file is read whole when opened).
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cstddef>
@@ -115,6 +116,20 @@ class ScanSource {
   std::optional<Sequence> sequence_;
   std::shared_ptr<const ScanGraph> graph_;
 };
+
+/// The farthest a sensor of the scans [first, last) of `source` goes from the origin along an
+/// axis, from the poses alone (sequence folders and scan graphs; 0 for a point file): what
+/// decides whether a run needs keys wider than OctoMap's 16 bits.
+inline double sensor_reach(const ScanSource& source, std::size_t first, std::size_t last) {
+  double reach = 0.0;
+  if (const Sequence* seq = source.sequence())
+    for (std::size_t i = first; i < last && i < seq->size(); ++i)
+      reach = std::max(reach, seq->pose(i).t.cwiseAbs().maxCoeff());
+  if (const ScanGraph* g = source.graph())
+    for (std::size_t i = first; i < last && i < g->nodes.size(); ++i)
+      reach = std::max(reach, g->nodes[i].pose.t.cwiseAbs().maxCoeff());
+  return reach;
+}
 
 /// True when the pose is exactly the identity (no transform needed).
 inline bool is_identity(const Pose& p) {

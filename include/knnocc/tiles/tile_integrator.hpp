@@ -8,7 +8,8 @@
 // update per keyframe (occupied wins within a keyframe, then clamping), and the clipped scan gives
 // every voxel of the tile exactly the update of the whole scan, its rays walked exactly as the
 // whole scan walks them. Given the rated keyframes of a run in order, the tile equals the same
-// region of the map Mapper builds from them in one process, bit for bit (tests/test_tiles.cpp).
+// region of the map Mapper builds from them in one process, bit for bit
+// (tests/test_tile_integrator.cpp, tests/test_tile_mapping.cpp).
 // A keyframe whose keyframe_reach() misses the tile changes nothing in it and may be left out.
 //
 // Thread safety: one writer (of its own map).

@@ -139,11 +139,8 @@ void write_tile_group(const RatedStore& store, const std::string& dir, const Til
       if (box.hi.t[a] - box.lo.t[a] > box.hi.t[axis] - box.lo.t[axis]) axis = a;
     const std::int64_t mid = box.lo.t[axis] + (box.hi.t[axis] - box.lo.t[axis] + 1) / 2;
     std::vector<TileCoord> low, high;
+    // Distinct tiles span at least two on the longest side: both halves hold some.
     for (const TileCoord& c : coords) (c.t[axis] < mid ? low : high).push_back(c);
-    if (low.empty() || high.empty()) {  // the tiles differ on another axis only: split them
-      low.assign(coords.begin(), coords.begin() + static_cast<std::ptrdiff_t>(coords.size() / 2));
-      high.assign(coords.begin() + static_cast<std::ptrdiff_t>(coords.size() / 2), coords.end());
-    }
     write_tile_group(store, dir, grid, std::move(low), threads, memory_limit, out, done,
                      tiles_done);
     write_tile_group(store, dir, grid, std::move(high), threads, memory_limit, out, done,

@@ -34,6 +34,7 @@
 #include <array>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -144,6 +145,14 @@ std::array<std::int64_t, 3> tile_shift(const TileGrid<Key>& grid, const TileCoor
     s[static_cast<std::size_t>(a)] = first - k16;
   }
   return s;
+}
+
+// The first OctoMap key of entry `e`'s node in its file.
+inline std::array<std::uint32_t, 3> tile_corner(const TileEntry& e) {
+  std::array<std::uint32_t, 3> corner{};
+  for (std::size_t a = 0; a < 3; ++a)
+    corner[a] = static_cast<std::uint32_t>(e.keys[a] - e.shift[a]);
+  return corner;
 }
 
 // Checks entry `t` against everything the index implies of it.
@@ -306,9 +315,7 @@ TileEntry write_tile(const std::string& dir, const TileGrid<Key>& grid, const Ti
   }
   map.for_each_voxel_in_bbox(
       b.lo, b.hi, [&](const Key&, float v) { (map.is_occupied(v) ? e.occupied : e.free) += 1; });
-  std::array<std::uint32_t, 3> corner{};
-  for (std::size_t a = 0; a < 3; ++a)
-    corner[a] = static_cast<std::uint32_t>(e.keys[a] - e.shift[a]);
+  const std::array<std::uint32_t, 3> corner = detail::tile_corner(e);
   const io::detail::OctreeNode bt =
       io::detail::OctreeEncoder<false, false, Key>(map, "", {}, e.shift)
           .encode_node(grid.depth(), corner, false);
@@ -424,6 +431,28 @@ OccupancyMap<Key> read_tile(const std::string& dir, const TileSetIndex& ix, cons
                               std::to_string(free) + " free voxels, the index says " +
                               std::to_string(e.occupied) + " and " + std::to_string(e.free));
   return map;
+}
+
+/// Throws io::Error naming the tile's file unless `map` (tile `e` as read_tile reads it, at the
+/// run's keys) encodes to the .bt and .ot node counts and summaries the index holds for it: what
+/// merging relies on besides the checks of read_tile.
+template <class Key>
+void check_tile_nodes(const std::string& dir, const TileSetIndex& ix, const TileEntry& e,
+                      const OccupancyMap<Key>& map) {
+  const std::array<std::uint32_t, 3> corner = detail::tile_corner(e);
+  const io::detail::OctreeNode bt =
+      io::detail::OctreeEncoder<false, false, Key>(map, "", {}, e.shift)
+          .encode_node(ix.tile_depth, corner, false);
+  const io::detail::OctreeNode ot =
+      io::detail::OctreeEncoder<true, false, Key>(map, "", {}, e.shift)
+          .encode_node(ix.tile_depth, corner, false);
+  const auto same = [](const io::detail::OctreeNode& n, const TileNodeInfo& i) {
+    return n.nodes == i.nodes && n.summary.leaf == i.leaf &&
+           std::memcmp(&n.summary.value, &i.value, sizeof(float)) == 0;
+  };
+  if (!same(bt, e.bt) || !same(ot, e.ot))
+    throw io::Error((std::filesystem::path(dir) / e.file).string(),
+                    "its tree does not match the index's summary of it: the tile set is damaged");
 }
 
 }  // namespace knnocc::tiles

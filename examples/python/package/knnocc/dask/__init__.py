@@ -44,7 +44,10 @@ WORKER_SHARE = 0.75  # of a worker's memory limit a tile's map may take (below D
 # ---- tasks (run on the workers; each imports knnocc there) -----------------------------------
 
 def _rate(sequence, rated, res, model, key_bits, crop, world_points, first, count, params):
-    os.makedirs(rated, exist_ok=True)
+    try:
+        os.mkdir(rated)  # inside the staged tile set; gone when the run was given up
+    except FileExistsError:
+        pass  # a retry of this task after a lost worker
     return _knnocc._rate_sequence(sequence, rated, res, model, key_bits=key_bits, crop=crop,
                                   world_points=world_points, first=first, count=count, **params)
 
@@ -118,11 +121,9 @@ def _key_bits(sequence, res, crop, max_range, first, count, key_bits):
             raise ValueError(f"key_bits must be 16 or 21, got {key_bits}")
         return key_bits
     try:
-        poses = knnocc.read_trajectory(pathlib.Path(sequence) / "poses.txt")
+        reach = _knnocc._sensor_reach(str(sequence), int(first), count)
     except knnocc.Error:
-        return 16  # not a sequence folder here: the rating task says what is wrong
-    poses = poses[first:None if count is None else first + count]
-    reach = float(abs(poses[:, :3, 3]).max()) if len(poses) else 0.0
+        return 16  # not readable here: the rating task says what is wrong
     margin = crop if crop else (max_range if max_range and max_range > 0 else 0.0)
     if reach + margin < 32768.0 * res:
         return 16
@@ -187,6 +188,18 @@ def _commit(staging, target):
         shutil.rmtree(old, ignore_errors=True)
 
 
+def _discard(staging):
+    """Removes a staged tile set that will not be committed. Renamed first: a task still running
+    on a worker (Dask cannot stop one) then fails to write instead of adding files to a folder
+    being removed."""
+    trash = staging + ".discard"
+    try:
+        os.rename(staging, trash)
+    except OSError:
+        trash = staging
+    shutil.rmtree(trash, ignore_errors=True)
+
+
 def _remove_temporaries(folder):
     """Temporaries a killed writer left (AtomicFile's NAME.tmp-XXXXXX)."""
     for p in pathlib.Path(folder).glob("*.tmp-*"):
@@ -224,8 +237,10 @@ def map_sequence(client, sequence, *, res, model="octomap", out=None, out_tiles=
                  quiet=False, **params):
     """Maps `sequence` (a sequence folder, or a scan graph / point file that the workers can read)
     on the cluster of `client` into the tile set `out_tiles` and/or the merged OctoMap file(s)
-    `out` (a .bt or .ot path, or a list of one of each): byte for byte what `knnocc map --input SEQUENCE --res RES --model MODEL` writes
-    in one process. The sequence and the outputs must be on storage the workers share with this
+    `out` (a .bt or .ot path, or a list of one of each): byte for byte what
+    `knnocc map --input SEQUENCE --res RES --model MODEL` writes in one process (coloured clouds
+    excepted: the tiles keep no colours, so an .ot is a plain OcTree where the tool writes a
+    ColorOcTree). The sequence and the outputs must be on storage the workers share with this
     process (an output folder is written by the workers).
 
     Options as `knnocc map`'s: res, model ('octomap', 'knn', 'knn2022', 'robust'), crop, max_range,
@@ -250,9 +265,12 @@ def map_sequence(client, sequence, *, res, model="octomap", out=None, out_tiles=
     bits = _key_bits(sequence, res, crop, max_range, first, count, key_bits)
     if bits == 21 and tile_depth == 0:
         raise ValueError("tile_depth 0 (one tile of OctoMap's whole key range) needs 16-bit keys")
-    target = str(out_tiles) if out_tiles is not None else files[0] + ".tiles"
-    parent = os.path.dirname(os.path.abspath(target))
-    staging = tempfile.mkdtemp(prefix=os.path.basename(target) + ".tmp-", dir=parent)
+    # Staged beside the tile set, or beside the first merged file when no tile set is kept (then
+    # the staging folder is all there is: nothing is ever committed to a folder name not given).
+    name = str(out_tiles) if out_tiles is not None else files[0]
+    parent = os.path.dirname(os.path.abspath(name))
+    staging = tempfile.mkdtemp(prefix=os.path.basename(os.path.abspath(name)) + ".tmp-",
+                               dir=parent)
     rated = os.path.join(staging, "rated")
     token = uuid.uuid4().hex[:8]
     run_params = dict(params)
@@ -270,18 +288,23 @@ def map_sequence(client, sequence, *, res, model="octomap", out=None, out_tiles=
                                   int(first), int(totals["clouds"]), entries)
         if not keep_rated:
             shutil.rmtree(rated)
-        _commit(staging, target)
+        # The merged files are written before the tile set is committed and renamed in one group:
+        # a merge that fails (a map beyond OctoMap's key range) leaves no tile set and no file.
+        if files:
+            try:
+                knnocc.merge_tiles(staging, files)
+            except knnocc.Error as e:
+                if e.filename != staging:
+                    raise
+                raise knnocc.Error(f"{files[0]}: {e.strerror}") from None
+        if out_tiles is not None:
+            _commit(staging, str(out_tiles))
+        else:
+            shutil.rmtree(staging)
     except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
+        _discard(staging)
         raise
-    written = [] if out_tiles is None else [str(out_tiles)]
-    try:
-        for f in files:
-            knnocc.merge_tiles(target, f)
-            written.append(f)
-    finally:
-        if out_tiles is None:
-            shutil.rmtree(target, ignore_errors=True)
+    written = ([] if out_tiles is None else [str(out_tiles)]) + files
     occupied = sum(e["occupied"] for e in entries)
     free = sum(e["free"] for e in entries)
     seconds = time.monotonic() - t0

@@ -99,7 +99,7 @@ def main():
     count = ["--count", args.count] if args.count else []
     print(f"bench_dask: drive {drive} at {args.res} m, tile depth {args.depth}")
     seconds, peak, line = run_tool(args.tool, "map", "--input", drive, "--res", args.res,
-                                   "--key-bits", 21, *count, "-o", out / "tool.ot")
+                                   "--threads", 1, *count, "-o", out / "tool.ot")
     print(f"  knnocc map, one thread:  {seconds:8.2f} s, peak {peak:8.1f} MB  ({line.strip()})")
     results = {}
     for workers in (1, 2):

@@ -222,11 +222,13 @@ void wide_keys(const Options& o) {
   const std::string dir = o.out + "/wide_tiles";
   fs::remove_all(dir);
   const Child t =
-      tool(o, {"map", "-i", o.drive, "--res", "0.1", "--out-tiles", dir, "--tile-depth", "4"});
+      tool(o, {"map", "-i", o.drive, "--res", "0.1", "--out-tiles", dir, "--tile-depth", "4",
+               "--memory-limit", "4G"});
   if (t.status == 0) {
     const knnocc::tiles::TileSetIndex ix = knnocc::tiles::read_index(dir);
     std::printf(
-        "  the whole drive at 0.1 m into %zu tiles (%d-bit keys): %.1f s, peak %.1f MB, "
+        "  the whole drive at 0.1 m into %zu tiles (%d-bit keys, --memory-limit 4G): %.1f s, "
+        "peak %.1f MB, "
         "%llu of %llu points out of range (goal: 0)\n",
         ix.tiles.size(), ix.key_bits, t.seconds, t.peak_mb,
         static_cast<unsigned long long>(ix.totals.out_of_range),

@@ -73,6 +73,7 @@
 #include "detail/brick_updates.hpp"
 #include "detail/clip.hpp"
 #include "detail/collect.hpp"
+#include "detail/crossing_walk.hpp"
 #include "detail/dense_box.hpp"
 #include "detail/rated_sums.hpp"
 #include "detail/ray_chunks.hpp"
@@ -407,54 +408,10 @@ class ScanInserter {
                             *mine.block, more, marks);
   }
 
-  // A clipped scan's crossing rays (detail/clip.hpp) into the thread's miss bitmap; returns the
-  // voxels visited. With a clip of whole bricks each ray jumps to its first voxel inside the clip
-  // and is walked on from there to its end on the fast path, in a box that holds that rest (the
-  // apply leaves out the bricks past the clip); otherwise each marks only the voxels inside.
+  // A clipped scan's crossing rays into the thread's miss bitmap (detail/crossing_walk.hpp).
   std::size_t walk_crossing_dense(detail::ThreadScratch& mine, const detail::ScanOrigin& o,
                                   const detail::RayFan& fan) {
-    detail::ScanBitmap& miss = mine.miss;
-    if (miss.has_bytes()) return walk_crossing_marks(mine, o, fan, detail::ByteMarks{miss.bytes()});
-    return walk_crossing_marks(mine, o, fan, detail::BitMarks{miss.words()});
-  }
-
-  template <class Marks>
-  std::size_t walk_crossing_marks(detail::ThreadScratch& mine, const detail::ScanOrigin& o,
-                                  const detail::RayFan& fan, Marks marks) {
-    const detail::ScanBitmap& miss = mine.miss;
-    auto mark = [&](const KeyPosition& p) { marks(miss.index(p.k[0], p.k[1], p.k[2])); };
-    if (!clip()) return detail::walk_crossing(map_->grid(), o, mine.crossing, *clip_, mark);
-    std::size_t visits = 0, next_ray = 0;
-    detail::LinearRay ray;
-    auto next = [&]() -> const detail::LinearRay* {
-      while (next_ray < mine.crossing.size()) {
-        const detail::RayEnd& r = mine.crossing[next_ray++];
-        int step[3];
-        detail::setup_walk(map_->grid(), o.point, r.end, o.key, r.key, step, ray.state);
-        KeyPosition at{{o.key[0], o.key[1], o.key[2]},
-                       {step[0], step[1], step[2]},
-                       {r.key[0], r.key[1], r.key[2]}};
-        const WalkState whole = ray.state;
-        switch (detail::jump_to_entry(ray.state, at, *clip_)) {
-          case detail::Entry::never:
-            continue;
-          case detail::Entry::walk:  // the entry at the ray's very end: walked one voxel at a time
-            visits += detail::walk_clipped<Key>(whole, at, *clip_, mark);
-            continue;
-          case detail::Entry::jumped:
-            break;
-        }
-        ray.index = miss.index(at.k[0], at.k[1], at.k[2]);
-        ray.end_index = miss.index(r.key[0], r.key[1], r.key[2]);
-        for (int a = 0; a < 3; ++a) ray.stride[a] = step[a] * miss.stride(a);
-        ray.clear_end = detail::end_point_clear<Key>(fan, r, whole.length);
-        return &ray;
-      }
-      return nullptr;
-    };
-    const std::size_t walked =
-        detail::walk_linear_rays(detail::best_walk_path<Marks>(), next, marks);
-    return visits + walked;
+    return detail::walk_crossing_dense(map_->grid(), mine, o, fan, *clip_, clip() != nullptr);
   }
 
   // The hashed path: every hit into the first thread's bricks, then each thread's chunks of rays

@@ -73,6 +73,7 @@ def rating_share(tool, stereo, out):
                                  "--model", model, "-o", out / f"stereo_{model}.ot")
         rated = out / f"rated_{model}"
         shutil.rmtree(rated, ignore_errors=True)
+        rated.mkdir()
         t0 = time.monotonic()
         _knnocc._rate_sequence(str(stereo), str(rated), 0.05, model, crop=6.0)
         rate = time.monotonic() - t0

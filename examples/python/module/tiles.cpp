@@ -118,7 +118,7 @@ std::optional<tiles::TileEntry> map_one(const tiles::RatedStore& store, const st
     const TileIntegrator<Key> tile = tiles::map_tile(store, grid, c, threads, memory_limit);
     if (tile.map().empty()) return std::nullopt;
     return tiles::write_tile(dir, grid, c, tile.map());
-  } catch (const MemoryLimitError&) {
+  } catch (const std::bad_alloc&) {  // MemoryLimitError, or no room for a rated keyframe
     throw io::Error((std::filesystem::path(dir) / TileGrid<Key>::file_name(c)).string(),
                     "the tile's map needs more than its memory limit of " +
                         std::to_string(memory_limit / 1000000) +

@@ -253,10 +253,11 @@ class RatedStore {
     return (std::filesystem::path(dir_) / entries_.at(i).file).string();
   }
 
-  /// Keyframe i into `rk` (its kind must be the run's, its counts the index's).
+  /// Keyframe i into `rk` (its kind must be the run's, its counts the index's). No memory for it:
+  /// std::bad_alloc, as for the map it goes into (tile mapping halves a group that runs out).
   void load(std::size_t i, RatedKeyframe& rk) const {
     const std::string path = path_of(i);
-    const io::detail::FileBuffer buf = io::detail::read_file(path);
+    const io::detail::FileBuffer buf = io::detail::read_file(path, true);
     decode_rated_keyframe(path, buf.data(), buf.size(), rk);
     const RatedKeyframeEntry& e = entries_[i];
     if (rk.kind != params_.kind || rk.points.size() != e.points || rk.edits.size() != e.edits)

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -40,7 +41,7 @@ class FileBuffer {
   std::size_t size() const noexcept { return size_; }
 
  private:
-  friend FileBuffer read_file(const std::string& path);
+  friend FileBuffer read_file(const std::string& path, bool bad_alloc_if_no_memory);
   std::unique_ptr<char[], knnocc::detail::BigFree> data_;
   std::size_t size_ = 0;
 };
@@ -67,7 +68,9 @@ inline FilePtr open_regular_file(const std::string& path, std::uintmax_t& size) 
   return f;
 }
 
-inline FileBuffer read_file(const std::string& path) {
+/// The whole file. No memory for it: io::Error naming the file, or std::bad_alloc when
+/// `bad_alloc_if_no_memory` (for a caller that recovers: a group of tiles too large is halved).
+inline FileBuffer read_file(const std::string& path, bool bad_alloc_if_no_memory = false) {
   std::uintmax_t size = 0;
   const FilePtr file = open_regular_file(path, size);
   std::FILE* f = file.get();
@@ -78,6 +81,7 @@ inline FileBuffer read_file(const std::string& path) {
       static_cast<char*>(knnocc::detail::big_alloc(buf.size_ + 1)),
       knnocc::detail::BigFree{buf.size_ + 1});
   if (!buf.data_) {
+    if (bad_alloc_if_no_memory) throw std::bad_alloc();
     throw Error(path, "cannot read: out of memory for " + std::to_string(buf.size_) + " bytes");
   }
   const std::size_t got = buf.size_ ? std::fread(buf.data_.get(), 1, buf.size_, f) : 0;

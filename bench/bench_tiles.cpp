@@ -221,9 +221,8 @@ void wide_keys(const Options& o) {
               same_file(a, b) ? "the same .ot, byte for byte" : "DIFFERENT");
   const std::string dir = o.out + "/wide_tiles";
   fs::remove_all(dir);
-  const Child t =
-      tool(o, {"map", "-i", o.drive, "--res", "0.1", "--out-tiles", dir, "--tile-depth", "4",
-               "--memory-limit", "4G"});
+  const Child t = tool(o, {"map", "-i", o.drive, "--res", "0.1", "--out-tiles", dir, "--tile-depth",
+                           "4", "--memory-limit", "4G"});
   if (t.status == 0) {
     const knnocc::tiles::TileSetIndex ix = knnocc::tiles::read_index(dir);
     std::printf(

@@ -147,6 +147,14 @@ inline TileOptions tile_options(const Args& args, const MapOptions& opt) {
       throw UsageError(f.option + " " + f.path +
                        ": with --out-tiles only .bt/.ot files are written (merged from the "
                        "tiles); knnocc view and convert read the tile set for the others");
+  // A file inside the tile set's folder would go with the folder when a later run replaces it.
+  const std::filesystem::path folder = std::filesystem::weakly_canonical(t.dir);
+  for (const MapFile& f : opt.files) {
+    const auto rel = std::filesystem::weakly_canonical(f.path).lexically_relative(folder);
+    if (!rel.empty() && *rel.begin() != "..")
+      throw UsageError(f.option + " " + f.path + ": inside the --out-tiles folder " + t.dir +
+                       "; write it beside the tile set");
+  }
   if (args.has("--tile-depth") && args.has("--tile-size"))
     throw UsageError("give --tile-depth or --tile-size, not both");
   t.key_bits = choose_key_bits(args, opt, true);

@@ -140,6 +140,12 @@ def test_outputs_are_all_or_nothing_and_no_folder_is_guessed(client, tmp_path):
                                  quiet=True)
     assert s["key_bits"] == 16 and (tmp_path / "m.bt").stat().st_size > 0
     assert (mine / "notes.txt").read_text() == "mine"
+    # A merged file inside the tile set's folder is refused before any work.
+    (tmp_path / "t").mkdir()
+    with pytest.raises(ValueError, match="inside the out_tiles folder"):
+        knnocc.dask.map_sequence(client, str(seq), res=0.1, out=str(tmp_path / "t" / "m.bt"),
+                                 out_tiles=str(tmp_path / "t"), quiet=True)
+    assert not any((tmp_path / "t").iterdir())
     # Upper-case extensions are OctoMap files too.
     knnocc.dask.map_sequence(client, str(seq), res=0.1, out=str(tmp_path / "UP.BT"), quiet=True)
     assert (tmp_path / "UP.BT").read_bytes() == (tmp_path / "m.bt").read_bytes()

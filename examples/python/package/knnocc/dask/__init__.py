@@ -262,6 +262,11 @@ def map_sequence(client, sequence, *, res, model="octomap", out=None, out_tiles=
     _check_options(res, model, tile_depth, crop, max_range, points_frame, params)
     if out_tiles is not None:
         _check_folder(out_tiles)
+        folder = pathlib.Path(out_tiles).resolve()
+        for f in files:
+            if folder in pathlib.Path(f).resolve().parents:
+                raise ValueError(f"out {f}: inside the out_tiles folder {out_tiles}; write it "
+                                 "beside the tile set")
     bits = _key_bits(sequence, res, crop, max_range, first, count, key_bits)
     if bits == 21 and tile_depth == 0:
         raise ValueError("tile_depth 0 (one tile of OctoMap's whole key range) needs 16-bit keys")

@@ -109,7 +109,7 @@ struct PendingFile {
   void rename() {
     if (std::rename(tmp->c_str(), target.c_str()) != 0) {
       const int err = errno;
-      throw Error(target, "cannot rename '" + *tmp + "' to the target: " + errno_text(err));
+      throw Error(target, "cannot rename '" + *tmp + "' to the target: " + errno_text(err), err);
     }
     release();
   }
@@ -176,7 +176,7 @@ class AtomicFile {
     const int fd = ::mkstemp(tmp_->data());  // O_CREAT | O_EXCL, a fresh name
     if (fd < 0) {
       const int err = errno;
-      throw Error(path_, "cannot create temporary file beside it: " + detail::errno_text(err));
+      throw Error(path_, "cannot create temporary file beside it: " + detail::errno_text(err), err);
     }
     lock_ = detail::lock_temporary(fd);
     slot_ = detail::register_temporary(tmp_->c_str());
@@ -186,7 +186,7 @@ class AtomicFile {
       const int err = errno;
       ::close(fd);
       discard();
-      throw Error(path_, "cannot open a temporary file: " + detail::errno_text(err));
+      throw Error(path_, "cannot open a temporary file: " + detail::errno_text(err), err);
     }
 #else
     target_ = path;
@@ -245,7 +245,7 @@ class AtomicFile {
   }
   [[noreturn]] void fail(const std::string& what) { fail_errno(what, errno); }
   [[noreturn]] void fail_errno(const std::string& what, int err) {
-    throw Error(path_, what + (err ? ": " + detail::errno_text(err) : std::string()));
+    throw Error(path_, what + (err ? ": " + detail::errno_text(err) : std::string()), err);
   }
 
   std::string path_, target_;
@@ -343,7 +343,7 @@ class StagingDir {
 #if KNNOCC_POSIX_FILES
     if (!::mkdtemp(tmp_->data())) {
       const int err = errno;
-      throw Error(dir, "cannot create a folder beside it: " + detail::errno_text(err));
+      throw Error(dir, "cannot create a folder beside it: " + detail::errno_text(err), err);
     }
 #else
     std::error_code ec;
@@ -374,14 +374,16 @@ class StagingDir {
         old = *tmp_ + ".old";
         if (std::rename(dir_.c_str(), old.c_str()) != 0) {
           const int err = errno;
-          throw Error(dir_, "cannot move the earlier folder aside: " + detail::errno_text(err));
+          throw Error(dir_, "cannot move the earlier folder aside: " + detail::errno_text(err),
+                      err);
         }
       }
     }
     if (std::rename(tmp_->c_str(), dir_.c_str()) != 0) {
       const int err = errno;
       if (!old.empty()) std::rename(old.c_str(), dir_.c_str());  // the earlier folder back
-      throw Error(dir_, "cannot rename '" + *tmp_ + "' to the target: " + detail::errno_text(err));
+      throw Error(dir_, "cannot rename '" + *tmp_ + "' to the target: " + detail::errno_text(err),
+                  err);
     }
     if (!old.empty()) {
       std::error_code ec;

@@ -64,17 +64,22 @@ inline std::string printable(const std::string& s) {
 // message short.
 class Error : public std::runtime_error {
  public:
-  Error(const std::string& file, const std::string& problem)
+  /// `sys_errno`: the errno of the system call that failed (ENOENT for a missing file), 0 when
+  /// the problem is in the content.
+  Error(const std::string& file, const std::string& problem, int sys_errno = 0)
       : std::runtime_error(printable(file) + ": " + printable(problem)),
         file_(printable(file)),
-        problem_(printable(problem)) {}
+        problem_(printable(problem)),
+        errno_(sys_errno) {}
 
   const std::string& file() const noexcept { return file_; }
   const std::string& problem() const noexcept { return problem_; }
+  int sys_errno() const noexcept { return errno_; }
 
  private:
   std::string file_;
   std::string problem_;
+  int errno_ = 0;
 };
 
 }  // namespace knnocc::io

@@ -57,14 +57,19 @@ inline FilePtr open_regular_file(const std::string& path, std::uintmax_t& size) 
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
   if (ec || !fs::exists(st)) {
-    throw Error(path, "cannot open: " + (ec ? ec.message() : errno_text(ENOENT)));
+    throw Error(path, "cannot open: " + (ec ? ec.message() : errno_text(ENOENT)),
+                ec ? ec.value() : ENOENT);
   }
   // Sizing a directory or FIFO by seeking gives nonsense, so refuse it up front.
-  if (!fs::is_regular_file(st)) throw Error(path, "cannot open: not a regular file");
+  if (!fs::is_regular_file(st))
+    throw Error(path, "cannot open: not a regular file", fs::is_directory(st) ? EISDIR : 0);
   size = fs::file_size(path, ec);
-  if (ec) throw Error(path, "cannot open: " + ec.message());
+  if (ec) throw Error(path, "cannot open: " + ec.message(), ec.value());
   FilePtr f(std::fopen(path.c_str(), "rb"));
-  if (!f) throw Error(path, "cannot open: " + errno_text(errno));
+  if (!f) {
+    const int err = errno;
+    throw Error(path, "cannot open: " + errno_text(err), err);
+  }
   return f;
 }
 
@@ -210,7 +215,10 @@ void for_each_file_line(const std::string& path, Fn&& fn) {
     const std::size_t got = std::fread(&buf[kept], 1, buf.size() - kept, f.get());
     buf.resize(kept + got);
     if (got == 0) {
-      if (std::ferror(f.get())) throw Error(path, "read failed: " + errno_text(errno));
+      if (std::ferror(f.get())) {
+        const int err = errno;
+        throw Error(path, "read failed: " + errno_text(err), err);
+      }
       eof = true;
     }
     if (first && buf.size() >= 3) {  // a UTF-8 byte-order mark, as for_each_line()

@@ -13,6 +13,7 @@
 #include <pybind11/pybind11.h>
 
 #include "owners.hpp"
+#include "uninitialised.hpp"
 
 namespace knnocc::python {
 
@@ -61,6 +62,9 @@ std::vector<std::uint64_t> ids_in(py::handle obj, std::size_t n, const char* nam
 std::vector<PointEvidence> evidence_in(py::handle obj, std::size_t n, const char* name);
 /// A non-negative integer (a keyframe id); TypeError or ValueError otherwise.
 std::uint64_t id_in(py::handle obj, const char* name);
+/// A memory limit in bytes (0: no limit): TypeError for a non-integer, ValueError for a negative
+/// one or one of 2**64 or more.
+std::size_t memory_limit_in(py::handle obj);
 /// A str, bytes or os.PathLike path.
 std::string path_in(py::handle obj);
 /// A pose as a 4x4 float64 array.

@@ -97,6 +97,7 @@ malformed.)");
   seq.def("__repr__", [](const SequenceRef& s) {
     return "<knnocc.Sequence " + s.path + ": " + std::to_string(s.source.size()) + " keyframes>";
   });
+  refuse_uninitialised(seq);
 
   m.def(
       "read_sequence",

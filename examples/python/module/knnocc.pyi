@@ -1,6 +1,7 @@
 """Type stubs of the knnocc extension module (examples/python/module); tests/python/test_stubs.py
 checks that every public name here exists in the module and the other way round."""
 
+import builtins
 import os
 from typing import Iterable, Iterator, Mapping, Optional, Tuple, Union
 
@@ -16,7 +17,18 @@ _Pose = npt.ArrayLike  # 4x4 sensor-to-world rigid transform
 _Ids = Optional[npt.ArrayLike]  # N non-negative integers, or None
 
 class Error(OSError):
-    """An unreadable or malformed input file, or an output that cannot be written."""
+    """An unreadable or malformed input file, or an output that cannot be written.
+
+    errno is the failed system call's errno (None for a problem in the content); with one, the
+    error is also the matching OSError subclass (Error.FileNotFoundError is a FileNotFoundError)."""
+
+    class FileNotFoundError(Error, builtins.FileNotFoundError): ...
+    class FileExistsError(Error, builtins.FileExistsError): ...
+    class PermissionError(Error, builtins.PermissionError): ...
+    class IsADirectoryError(Error, builtins.IsADirectoryError): ...
+    class NotADirectoryError(Error, builtins.NotADirectoryError): ...
+    class InterruptedError(Error, builtins.InterruptedError): ...
+    class TimeoutError(Error, builtins.TimeoutError): ...
 
 class OccupancyMap:
     def __init__(

@@ -9,6 +9,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -184,12 +185,14 @@ py::tuple cast_ray(const MapRef& self, const py::object& origin, const py::objec
   return py::make_tuple(hits, ends);
 }
 
-// Pickle state: a format number, the resolution, the model's probabilities, the clamping and
-// threshold in log-odds (exact), the memory limit, then every known voxel's key (3 x uint16)
-// and log-odds (float32) as bytes.
-constexpr int kStateVersion = 1;
+// Pickle state (version 2): the format number, the resolution, the model's probabilities, the
+// clamping and threshold in log-odds (exact), the memory limit, the number of voxels, every known
+// voxel's key (3 x uint16) and log-odds (float32) as bytes, and the CRC-32 of those bytes (a
+// state cut short or damaged in transit is refused, not loaded in part). Version 1, without the
+// count and the CRC, is still read.
+constexpr int kStateVersion = 2;
 
-py::tuple get_state(const MapRef& self) {
+py::object get_state(const MapRef& self) {
   std::vector<std::uint16_t> keys;
   std::vector<float> values;
   const auto lock = self.owner->guard.read("OccupancyMap.__getstate__");
@@ -204,40 +207,117 @@ py::tuple get_state(const MapRef& self) {
     });
   }
   const OccupancyParams& p = map.params();
-  return py::make_tuple(
-      kStateVersion, map.resolution(), self.object ? self.object->prob_hit() : 0.7,
-      self.object ? self.object->prob_miss() : 0.4, p.clamp_min, p.clamp_max, p.occupancy_threshold,
-      map.memory_limit(),
-      py::bytes(reinterpret_cast<const char*>(keys.data()), keys.size() * sizeof(keys[0])),
-      py::bytes(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(float)));
+  const py::bytes key_bytes(reinterpret_cast<const char*>(keys.data()),
+                            keys.size() * sizeof(keys[0]));
+  const py::bytes value_bytes(reinterpret_cast<const char*>(values.data()),
+                              values.size() * sizeof(float));
+  const py::object crc32 = py::module_::import("zlib").attr("crc32");
+  return py::make_tuple(kStateVersion, map.resolution(),
+                        self.object ? self.object->prob_hit() : 0.7,
+                        self.object ? self.object->prob_miss() : 0.4, p.clamp_min, p.clamp_max,
+                        p.occupancy_threshold, map.memory_limit(), values.size(), key_bytes,
+                        value_bytes, crc32(value_bytes, crc32(key_bytes)));
 }
 
-MapRef set_state(const py::tuple& t) {
-  if (t.size() != 10 || t[0].cast<int>() != kStateVersion)
-    throw py::value_error("OccupancyMap: not a pickled knnocc map of this version");
+[[noreturn]] void bad_state(const std::string& problem) {
+  throw py::value_error("OccupancyMap.__setstate__: " + problem);
+}
+
+// Item `i` of a state, a finite real number.
+double state_number(const py::tuple& t, std::size_t i, const char* name) {
+  const py::handle v = t[i];
+  if (!(py::isinstance<py::float_>(v) || py::isinstance<py::int_>(v)) ||
+      py::isinstance<py::bool_>(v))
+    bad_state(std::string(name) + " must be a number, got " +
+              py::str(py::type::of(v).attr("__name__")).cast<std::string>());
+  const double x = v.cast<double>();
+  if (!std::isfinite(x)) bad_state(std::string(name) + " must be finite");
+  return x;
+}
+
+// Item `i` of a state, an integer in [0, 2^64).
+std::size_t state_count(const py::tuple& t, std::size_t i, const char* name) {
+  const py::handle v = t[i];
+  if (!py::isinstance<py::int_>(v) || py::isinstance<py::bool_>(v) ||
+      v.cast<py::int_>() < py::int_(0))
+    bad_state(std::string(name) + " must be a non-negative integer");
+  try {
+    return v.cast<std::size_t>();
+  } catch (const py::cast_error&) {
+    bad_state(std::string(name) + " must be below 2**64");
+  }
+}
+
+MapRef set_state(const py::object& state) {
+  if (!py::isinstance<py::tuple>(state))
+    bad_state("not a pickled knnocc map (the state is not a tuple)");
+  const auto t = py::reinterpret_borrow<py::tuple>(state);
+  const std::size_t size = t.size();
+  const py::handle version = size ? t[0] : py::handle();
+  if (!version || !py::isinstance<py::int_>(version) || py::isinstance<py::bool_>(version) ||
+      !((version.cast<py::int_>().equal(py::int_(1)) && size == 10) ||
+        (version.cast<py::int_>().equal(py::int_(kStateVersion)) && size == 12)))
+    bad_state("not a pickled knnocc map of state version 1 (10 items) or 2 (12 items)");
+  const bool v1 = size == 10;
+  const double resolution = state_number(t, 1, "resolution");
+  const double prob_hit = state_number(t, 2, "prob_hit"),
+               prob_miss = state_number(t, 3, "prob_miss");
   OccupancyParams p;
-  p.clamp_min = t[4].cast<float>();
-  p.clamp_max = t[5].cast<float>();
-  p.occupancy_threshold = t[6].cast<float>();
-  const std::string keys = t[8].cast<std::string>(), values = t[9].cast<std::string>();
-  const std::size_t n = values.size() / sizeof(float);
-  if (values.size() % sizeof(float) != 0 || keys.size() != n * 3 * sizeof(std::uint16_t))
-    throw py::value_error("OccupancyMap: the pickled voxels are damaged");
-  const auto memory_limit = t[7].cast<std::size_t>();
-  Map map(t[1].cast<double>(), p);
+  p.clamp_min = static_cast<float>(state_number(t, 4, "clamp_min"));
+  p.clamp_max = static_cast<float>(state_number(t, 5, "clamp_max"));
+  p.occupancy_threshold = static_cast<float>(state_number(t, 6, "occupancy_threshold"));
+  const std::size_t memory_limit = state_count(t, 7, "memory_limit");
+  const std::size_t keys_at = v1 ? 8 : 9;
+  for (std::size_t i : {keys_at, keys_at + 1})
+    if (!py::isinstance<py::bytes>(t[i]))
+      bad_state(std::string(i == keys_at ? "the keys" : "the log-odds") + " must be bytes");
+  const auto keys = t[keys_at].cast<std::string_view>();
+  const auto values = t[keys_at + 1].cast<std::string_view>();
+  const std::size_t n = v1 ? values.size() / sizeof(float) : state_count(t, 8, "the voxel count");
+  if (values.size() != n * sizeof(float) || keys.size() != n * 3 * sizeof(std::uint16_t))
+    bad_state(std::to_string(keys.size()) + " bytes of keys and " + std::to_string(values.size()) +
+              " of log-odds for " + std::to_string(n) +
+              " voxels (6 and 4 each): the state is cut short or damaged");
+  if (!v1) {
+    const py::object crc32 = py::module_::import("zlib").attr("crc32");
+    if (!crc32(t[keys_at + 1], crc32(t[keys_at])).equal(t[11]))
+      bad_state("the voxels do not match their CRC-32: the state is damaged");
+  }
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    bad_state(e.what());
+  }
+  std::optional<Map> map;
+  try {
+    map.emplace(resolution, p);
+  } catch (const std::invalid_argument& e) {
+    bad_state(e.what());
+  }
+  std::size_t bad = n;
   {
     const py::gil_scoped_release nogil;
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t i = 0; i < n && bad == n; ++i) {
       std::uint16_t k[3];
       float v;
       std::memcpy(k, keys.data() + 3 * sizeof(std::uint16_t) * i, sizeof k);
       std::memcpy(&v, values.data() + sizeof(float) * i, sizeof v);
-      map.set(OcKey(k[0], k[1], k[2]), v);
+      if (!std::isfinite(v))
+        bad = i;
+      else
+        map->set(OcKey(k[0], k[1], k[2]), v);
     }
-    map.set_memory_limit(memory_limit);
+    map->set_memory_limit(memory_limit);
   }
-  auto object = make_map_object(std::move(map), t[2].cast<double>(), t[3].cast<double>());
-  return MapRef{object, object};
+  if (bad < n) bad_state("voxel " + std::to_string(bad) + " has a log-odds that is not finite");
+  if (map->num_voxels() != n)
+    bad_state(std::to_string(n - map->num_voxels()) + " voxel keys appear twice");
+  try {
+    auto object = make_map_object(std::move(*map), prob_hit, prob_miss);
+    return MapRef{object, object};
+  } catch (const std::invalid_argument& e) {
+    bad_state(e.what());
+  }
 }
 
 std::string repr(const MapRef& self) {
@@ -353,10 +433,11 @@ voxels (OctoMap's option). MemoryError when the map would pass its memory_limit.
         const auto lock = self.owner->guard.read("OccupancyMap.memory_limit");
         return self.owner->map().memory_limit();
       },
-      [](const MapRef& self, std::size_t bytes) {
+      [](const MapRef& self, const py::object& bytes) {
+        const std::size_t limit = memory_limit_in(bytes);
         MapObject& object = self.writable("OccupancyMap.memory_limit");
         const auto lock = object.guard.write("OccupancyMap.memory_limit");
-        object.set_memory_limit(bytes);
+        object.set_memory_limit(limit);
       },
       "Bytes the map (and the inserter's scratch) may use; 0: no limit (the default). An "
       "insertion that would pass it raises MemoryError.");
@@ -389,6 +470,7 @@ map, or a zero direction.)");
       "same log-odds bit for bit.");
   c.def("__repr__", &repr);
   c.def(py::pickle(&get_state, &set_state));
+  refuse_uninitialised(c);
 
   m.def(
       "read_map",

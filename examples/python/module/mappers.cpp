@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <deque>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -179,9 +180,10 @@ void bind_owner_members(py::class_<Ref>& c, const char* cls, const char* models)
         const auto lock = self.owner->guard.read(name);
         return self.owner->memory_limit();
       },
-      [name = member_name(cls, "memory_limit")](const Ref& self, std::size_t bytes) {
+      [name = member_name(cls, "memory_limit")](const Ref& self, const py::object& bytes) {
+        const std::size_t limit = memory_limit_in(bytes);
         const auto lock = self.owner->guard.write(name);
-        self.owner->set_memory_limit(bytes);
+        self.owner->set_memory_limit(limit);
       },
       "Bytes the map may use (0: no limit, the default); an insertion that would pass it raises "
       "MemoryError.");
@@ -366,6 +368,7 @@ integers, the SLAM system's found, visible and observations counts per point
 (Sequence.evidence(i) reads them from PLY clouds), which the robust model uses; the others ignore
 them. MemoryError past memory_limit.)");
   bind_owner_members(mapper, "Mapper", "'octomap', 'knn', 'knn2022' or 'robust'.");
+  refuse_uninitialised(mapper);
 
   py::class_<LiveRef> live(m, "LiveMapper", (std::string(kLiveDoc) + kParamsDoc).c_str());
   live.def(py::init([](double resolution, const std::string& model, const py::kwargs& kw) {
@@ -430,7 +433,11 @@ or None (k-NN model: always or never). ValueError for a known id or a bad pose.)
   live.def(
       "__contains__",
       [](const LiveRef& self, const py::object& id) {
-        if (!py::isinstance<py::int_>(id) || id.cast<py::int_>() < py::int_(0)) return false;
+        // Like a set: what cannot be a keyframe id (not an integer, negative, 2**64 or more) is
+        // not held.
+        if (!py::isinstance<py::int_>(id) || id.cast<py::int_>() < py::int_(0) ||
+            id.cast<py::int_>() > py::int_(std::numeric_limits<std::uint64_t>::max()))
+          return false;
         const std::uint64_t i = id_in(id, "keyframe id");
         const auto lock = self.owner->guard.read("LiveMapper.__contains__");
         return self.owner->contains(i);
@@ -452,6 +459,7 @@ or None (k-NN model: always or never). ValueError for a known id or a bad pose.)
       "'replayed': keyframes whose rays were cast again, 'bricks': map bricks recomputed by a "
       "regional replay, 'rebuilt': the map was built again from scratch}.");
   bind_owner_members(live, "LiveMapper", "'octomap' or 'knn'.");
+  refuse_uninitialised(live);
 }
 
 }  // namespace knnocc::python

@@ -99,6 +99,7 @@ void bind_knn2022(py::module_& m) {
   c.def_property_readonly(
       "count", [](const FirstPass& self) { return self.pass.distribution().count(); },
       "Inner points with a finite d so far.");
+  refuse_uninitialised(c);
 }
 
 }  // namespace knnocc::python

@@ -24,11 +24,35 @@ std::string shape_text(const py::array& a) {
   return s + (a.ndim() == 1 ? ",)" : ")");
 }
 
-// numpy's own conversion (np.asarray) to a C-contiguous float64 array; ValueError if it fails.
+// numpy's own conversion (np.asarray) of obj to a C-contiguous, aligned array of T, a view when
+// obj is one already; null when obj is not numbers. numpy's MemoryError (a copy of a huge strided
+// or broadcast array) stays a MemoryError.
+template <class T>
+InPlace<T> in_place(py::handle obj) {
+  const auto& api = py::detail::npy_api::get();
+  PyObject* r = api.PyArray_FromAny_(obj.ptr(), py::dtype::of<T>().release().ptr(), 0, 0,
+                                     py::detail::npy_api::NPY_ARRAY_ENSUREARRAY_ |
+                                         py::array::c_style | py::array::forcecast | kAligned,
+                                     nullptr);
+  if (!r) {
+    if (PyErr_ExceptionMatches(PyExc_MemoryError)) throw py::error_already_set();
+    PyErr_Clear();
+  }
+  return py::reinterpret_steal<InPlace<T>>(r);
+}
+
+// A C-contiguous float64 array; ValueError if obj is not numbers.
 py::array_t<double> doubles_in(py::handle obj, const char* name) {
-  auto a = InPlace<double>::ensure(obj);
+  auto a = in_place<double>(obj);
   if (!a) throw py::value_error(std::string(name) + " must be an array of numbers");
   return std::move(a);
+}
+
+// Whether `a` (an object array) holds only Python integers: integers too large for numpy's types.
+bool only_ints(const py::array& a) {
+  for (const py::handle v : a.attr("flat"))
+    if (!py::isinstance<py::int_>(v)) return false;
+  return true;
 }
 }  // namespace
 
@@ -36,9 +60,9 @@ PointsIn::PointsIn(py::handle obj, const char* name) {
   const bool f32 = py::isinstance<py::array>(obj) &&
                    py::reinterpret_borrow<py::array>(obj).dtype().equal(py::dtype::of<float>());
   if (f32)
-    array_ = InPlace<float>::ensure(obj);
+    array_ = in_place<float>(obj);
   else
-    array_ = InPlace<double>::ensure(obj);
+    array_ = in_place<double>(obj);
   if (!array_) throw py::value_error(std::string(name) + " must be an (N, 3) array of numbers");
   if (array_.ndim() < 1 || array_.shape(array_.ndim() - 1) != 3)
     throw py::value_error(std::string(name) + " must have shape (N, 3), got " + shape_text(array_));
@@ -84,6 +108,8 @@ std::vector<PointEvidence> evidence_in(py::handle obj, std::size_t n, const char
   if (obj.is_none()) return {};
   const std::string what(name);
   const auto kind = py::array::ensure(obj);
+  if (kind && kind.dtype().kind() == 'O' && kind.size() > 0 && only_ints(kind))
+    throw py::value_error(what + " must be in [0, 2^32 - 1]");
   if (!kind || (kind.dtype().kind() != 'i' && kind.dtype().kind() != 'u'))
     throw py::value_error(what +
                           " must be integers (found, visible, observations per point) or "
@@ -109,6 +135,8 @@ std::vector<std::uint64_t> ids_in(py::handle obj, std::size_t n, const char* nam
   if (obj.is_none()) return {};
   const std::string what(name);
   const auto kind = py::array::ensure(obj);  // plain conversion, to look at the dtype
+  if (kind && kind.dtype().kind() == 'O' && kind.size() > 0 && only_ints(kind))
+    throw py::value_error(what + " must be map-point ids in [0, 2^64 - 1]");
   if (!kind || (kind.dtype().kind() != 'i' && kind.dtype().kind() != 'u'))
     throw py::value_error(what + " must be integers (one map-point id per point) or None");
   std::vector<std::uint64_t> ids;
@@ -118,11 +146,11 @@ std::vector<std::uint64_t> ids_in(py::handle obj, std::size_t n, const char* nam
                             " expected, got shape " + shape_text(a));
   };
   if (kind.dtype().kind() == 'u') {
-    const auto a = InPlace<std::uint64_t>::ensure(kind);
+    const auto a = in_place<std::uint64_t>(kind);
     check_length(a);
     ids.assign(a.data(), a.data() + a.size());
   } else {
-    const auto a = InPlace<std::int64_t>::ensure(kind);
+    const auto a = in_place<std::int64_t>(kind);
     check_length(a);
     ids.reserve(n);
     for (py::ssize_t i = 0; i < a.size(); ++i) {
@@ -142,6 +170,18 @@ std::uint64_t id_in(py::handle obj, const char* name) {
     return obj.cast<std::uint64_t>();
   } catch (const py::cast_error&) {
     throw py::value_error(std::string(name) + " must be below 2**64");
+  }
+}
+
+std::size_t memory_limit_in(py::handle obj) {
+  if (!py::isinstance<py::int_>(obj) || py::isinstance<py::bool_>(obj))
+    throw py::type_error("memory_limit must be an integer (bytes; 0: no limit)");
+  if (obj.cast<py::int_>() < py::int_(0))
+    throw py::value_error("memory_limit must not be negative (bytes; 0: no limit)");
+  try {
+    return obj.cast<std::size_t>();
+  } catch (const py::cast_error&) {
+    throw py::value_error("memory_limit must be below 2**64 bytes");
   }
 }
 
@@ -202,25 +242,47 @@ limit MemoryError.)";
   // the process: the translator raises it at any time.
   py::dict scope;
   scope["__name__"] = "knnocc";
+  // A failed system call's errno also picks the matching OSError subclass (knnocc.Error.
+  // FileNotFoundError is a knnocc.Error and a FileNotFoundError), so `except FileNotFoundError`
+  // works as with open().
   py::exec(R"(class Error(OSError):
     """An unreadable or malformed input file, or an output that cannot be written.
 
-    str(e) is "FILE: problem"; e.filename is the file and e.strerror the problem."""
+    str(e) is "FILE: problem"; e.filename is the file, e.strerror the problem and e.errno the
+    errno of the system call that failed (None for a problem in the file's content). With an
+    errno it is also the matching OSError subclass: a missing file is an
+    Error.FileNotFoundError, which `except FileNotFoundError` catches."""
 
     def __str__(self):
-        return str(self.args[0]) if len(self.args) == 1 else super().__str__()
+        if self.filename is not None and self.strerror is not None:
+            return f"{self.filename}: {self.strerror}"
+        return super().__str__()
+
+
+for _base in (FileNotFoundError, FileExistsError, PermissionError, IsADirectoryError,
+              NotADirectoryError, InterruptedError, TimeoutError):
+    _sub = type(_base.__name__, (Error, _base), {"__module__": "knnocc",
+                "__doc__": f"A knnocc.Error that is also a {_base.__name__}."})
+    _sub.__qualname__ = "Error." + _base.__name__
+    setattr(Error, _base.__name__, _sub)
+
+
+def _error(errno, problem, file):
+    cls = Error
+    if errno:
+        cls = getattr(Error, type(OSError(errno, "")).__name__, Error)
+    return cls(errno or None, problem, file)
 )",
            scope);
   static PyObject* error = py::object(scope["Error"]).release().ptr();
+  static PyObject* make_error = py::object(scope["_error"]).release().ptr();
   m.add_object("Error", py::handle(error).inc_ref());
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const knnocc::io::Error& e) {
-      py::object exc = py::handle(error)(e.what());
-      exc.attr("filename") = e.file();
-      exc.attr("strerror") = e.problem();
-      PyErr_SetObject(error, exc.ptr());
+      const py::object exc = py::handle(make_error)(e.sys_errno(), e.problem(), e.file());
+      PyErr_SetObject(reinterpret_cast<PyObject*>(Py_TYPE(exc.ptr())), exc.ptr());
     }
   });
 

@@ -345,3 +345,15 @@ def test_membership_and_inputs(knnocc):
     with pytest.raises(MemoryError):
         m.insert_point_cloud(huge, (0, 0, 0))
     assert len(m) == 0
+    # Under a memory limit, a copy that would pass it is refused before numpy makes it.
+    view = np.lib.stride_tricks.as_strided(np.ones(3), shape=(10**8, 3), strides=(0, 8))
+    live = knnocc.LiveMapper(0.1)
+    for obj, insert in ((m, lambda: m.insert_point_cloud(view, (0, 0, 0))),
+                        (mapper, lambda: mapper.insert_keyframe((0, 0, 0), view)),
+                        (live, lambda: live.add(0, np.eye(4), view))):
+        obj.memory_limit = 10**7
+        with pytest.raises(MemoryError, match="2400.0* MB, more than the memory limit"):
+            insert()
+        assert len(obj.map if obj is not m else m) == 0
+    m.insert_point_cloud(np.ones((1000, 3)), (0, 0, 0))  # read in place: no copy to refuse
+    assert len(m) > 0

@@ -36,9 +36,11 @@ inline thread_local InputRecord last_points_input;
 /// An (N, 3) (or (..., 3)) array of points. A C-contiguous, aligned float32 or float64 numpy
 /// array is read in place; anything else is converted once (float32 arrays to float32, the rest
 /// to float64). ValueError for a shape without a last axis of 3 or values that are not numbers.
+/// `copy_limit` (bytes, 0: none): an array whose copy would need more is refused with MemoryError
+/// before numpy allocates it (an object's memory_limit covers the copy of its input).
 class PointsIn {
  public:
-  PointsIn(py::handle obj, const char* name);
+  PointsIn(py::handle obj, const char* name, std::size_t copy_limit = 0);
   const PointsView& view() const { return view_; }
   std::size_t size() const { return view_.size; }
   /// The input's shape without its last axis: the shape of one result per point.

@@ -376,9 +376,9 @@ void bind_map(py::module_& m) {
         MapObject& object = self.writable("OccupancyMap.insert_point_cloud");
         if (threads < 1 || threads > 1024)
           throw py::value_error("threads must be in [1, 1024], got " + std::to_string(threads));
-        const PointsIn in(points, "points");
-        const Point3d o = vec3_in(origin, "origin");
         const auto lock = object.guard.write("OccupancyMap.insert_point_cloud");
+        const PointsIn in(points, "points", object.memory_limit());
+        const Point3d o = vec3_in(origin, "origin");
         const py::gil_scoped_release nogil;
         object.insert_point_cloud(o, in.view(), max_range, static_cast<unsigned>(threads),
                                   discretize);

@@ -56,9 +56,24 @@ bool only_ints(const py::array& a) {
 }
 }  // namespace
 
-PointsIn::PointsIn(py::handle obj, const char* name) {
+PointsIn::PointsIn(py::handle obj, const char* name, std::size_t copy_limit) {
   const bool f32 = py::isinstance<py::array>(obj) &&
                    py::reinterpret_borrow<py::array>(obj).dtype().equal(py::dtype::of<float>());
+  if (copy_limit && py::isinstance<py::array>(obj)) {
+    const auto a = py::reinterpret_borrow<py::array>(obj);
+    const bool in_place = (f32 || a.dtype().equal(py::dtype::of<double>())) &&
+                          (a.flags() & py::array::c_style) && (a.flags() & kAligned);
+    const double bytes = double(a.size()) * (f32 ? 4.0 : 8.0);
+    if (!in_place && bytes > double(copy_limit)) {
+      PyErr_SetString(PyExc_MemoryError,
+                      (std::string(name) + ": the " + shape_text(a) +
+                       " array is not a C-contiguous float32 or float64 array; its copy would "
+                       "need " +
+                       std::to_string(bytes / 1e6) + " MB, more than the memory limit")
+                          .c_str());
+      throw py::error_already_set();
+    }
+  }
   if (f32)
     array_ = in_place<float>(obj);
   else

@@ -56,3 +56,34 @@ TEST_CASE("io.read_points dispatches on the extension") {
   CHECK(contains(error_of([&] { io::read_points(dir.file("noext")); }),
                  "unknown point-file extension"));
 }
+
+TEST_CASE(
+    "point_file.ids are a property of the format: an empty cloud that declares them has ids") {
+  ScratchDir dir("point_file_empty_ids");
+  const std::string ply = dir.file("e.ply"), pcd = dir.file("e.pcd"), bare = dir.file("b.ply");
+  write_bytes(ply,
+              "ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\n"
+              "property float y\nproperty float z\nproperty uint id\nend_header\n");
+  write_bytes(pcd,
+              "FIELDS x y z id\nSIZE 4 4 4 4\nTYPE F F F U\nCOUNT 1 1 1 1\nWIDTH 0\nHEIGHT 1\n"
+              "POINTS 0\nDATA ascii\n");
+  write_bytes(bare,
+              "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+              "property float z\nend_header\n");
+  for (const std::string& path : {ply, pcd}) {
+    CAPTURE(path);
+    const io::Cloud c = io::read_points(path);
+    CHECK(c.points.empty());
+    CHECK(c.has_ids());
+  }
+  CHECK_FALSE(io::read_points(bare).has_ids());
+  // Written back, the empty cloud still declares them; cropped to nothing, it keeps them.
+  io::write_ply_cloud(dir.file("copy.ply"), io::read_points(ply));
+  CHECK(io::read_points(dir.file("copy.ply")).has_ids());
+  io::Cloud c;
+  c.points = {{1, 0, 0}};
+  c.ids = {7};
+  io::crop_cloud(c, 0.5);
+  CHECK(c.points.empty());
+  CHECK(c.has_ids());
+}

@@ -107,7 +107,10 @@ the model's defaults (knn2022: its flags below), as `knnocc map` builds it; sums
                 saw them both empty and occupied (a depth edge); empty_only: the others
 With the OctoMap model, a last line gives the floor at its recall less 2 percentage points:
   heldout_floor recall X (octomap's - 0.02) seen_through N (X % of octomap's)
-It needs no ground truth and no rule of any model.
+It needs no ground truth and no rule of any model. With nothing to score (no map point seen by
+--min-views held-out keyframes of one fold: too many --folds, or --min-views above every count) it
+exits 2 naming why, and prints no score. A keyframe of zero points whose file declares the id
+property is a keyframe with ids (an empty one).
 
 The OctoMap model at its best (--tune-octomap SEQ --reference REF): SEQ mapped with the OctoMap
 model at every hit {0.55 0.6 0.7 0.8 0.9 0.97} x miss {0.05 0.1 0.2 0.3 0.4 0.45 0.49} x
@@ -263,7 +266,7 @@ int run_eval_ids(const Args& args) {
   std::vector<eval::ObservedKeyframe> kfs(seq.size());
   for (std::size_t i = 0; i < seq.size(); ++i) {
     const io::Cloud cloud = seq.load_cloud(i);
-    if (cloud.ids.empty())
+    if (!cloud.has_ids())
       throw io::Error(seq_path, "cloud " + std::to_string(i) + " has no map-point ids");
     io::keyframe_to_world(seq.pose(i), cloud, crop, kfs[i].points, kfs[i].ids);
     mpv.add_keyframe(kfs[i].points, kfs[i].ids);
@@ -300,8 +303,9 @@ int run_eval_ids(const Args& args) {
 
 }  // namespace
 
-int run_eval(const Args& args) {
-  use_memory_limit(args);
+namespace {
+
+int run_eval_any(const Args& args) {
   if (args.has("--heldout")) return run_eval_heldout(args);
   if (args.has("--tune-octomap")) return run_eval_tune(args);
   if (args.has("--ids")) return run_eval_ids(args);
@@ -323,6 +327,20 @@ int run_eval(const Args& args) {
   print_confusion(
       eval::count_confusion(map, eval::ShapeVoxels<OcKey>(ref, map.grid(), opt.ground_band)));
   return 0;
+}
+
+}  // namespace
+
+int run_eval(const Args& args) {
+  use_memory_limit(args);
+  // Running out of memory names what is evaluated (a file being read names itself first).
+  std::string subject = "eval";
+  for (const char* o : {"--heldout", "--tune-octomap", "--ids", "--map"})
+    if (args.has(o)) {
+      subject = args.str(o);
+      break;
+    }
+  return within_memory(subject, "evaluating it", [&] { return run_eval_any(args); });
 }
 
 }  // namespace knnocc::cli

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <utility>
@@ -39,6 +40,24 @@ inline std::vector<eval::IdKeyframe> read_id_keyframes(const std::string& path, 
       throw io::Error(seq.cloud_path(i), e.what());
     }
   });
+}
+
+/// io::Error naming the sequence when no fold holds a map point that --min-views of its held-out
+/// keyframes observe: with nothing to score, a recall of 0 would read as a result.
+inline void check_something_to_score(const std::string& path,
+                                     const std::vector<eval::IdKeyframe>& keyframes,
+                                     const eval::HeldoutOptions& opt) {
+  std::uint32_t most = 0;  // the most held-out keyframes of one fold that observe one map point
+  for (std::size_t f = 0; f < opt.folds; ++f)
+    for (const auto& e :
+         eval::heldout_points(keyframes, eval::fold_indices(keyframes.size(), opt.folds, f, true)))
+      most = std::max(most, e.second.views);
+  if (most >= opt.min_views) return;
+  throw io::Error(path, "nothing to score: no map point is seen by --min-views " +
+                            std::to_string(opt.min_views) + " held-out keyframes of one fold (" +
+                            std::to_string(keyframes.size()) + " keyframes in --folds " +
+                            std::to_string(opt.folds) + ": at most " + std::to_string(most) +
+                            " see one point); use fewer --folds or a lower --min-views");
 }
 
 /// The map of keyframes[train] built by Mapper<Model> (as `knnocc map` does: float points for
@@ -118,6 +137,7 @@ inline int run_eval_heldout(const Args& args) {
   if (keyframes.size() < opt.folds)
     throw io::Error(path, std::to_string(keyframes.size()) + " keyframes for " +
                               std::to_string(opt.folds) + " folds");
+  check_something_to_score(path, keyframes, opt);
   // The 2022 model's training keyframes, uncropped (the same ones without --crop).
   std::vector<eval::IdKeyframe> whole;
   if (which == "all" || which == "knn2022")

@@ -135,7 +135,7 @@ int info_point_file(const std::string& path, const io::ScanSource& source) {
   }
   std::printf("points: %zu\n", cloud.points.size());
   std::printf("non-finite points: %zu\n", box.nonfinite);
-  std::printf("ids: %s\n", cloud.ids.empty() ? "no" : "yes");
+  std::printf("ids: %s\n", cloud.has_ids() ? "yes" : "no");
   box.print("bounds");
   return 0;
 }

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -32,6 +33,7 @@
 #include "args.hpp"
 #include "map_picture.hpp"
 #include "output_set.hpp"
+#include "resource_limits.hpp"
 #include "view_page.hpp"
 
 namespace knnocc::cli {
@@ -99,12 +101,15 @@ inline std::vector<MapFile> requested_map_files(const Args& args,
   return files;
 }
 
-/// The outputs to check before any work: every map file, and the image of a 2D grid.
+/// The outputs to check before any work: every map file, and the image of a 2D grid (io::Error
+/// when its name cannot be written in the YAML).
 inline OutputList map_file_outputs(const std::vector<MapFile>& files) {
   OutputList out;
   for (const MapFile& f : files) {
     out.emplace_back(f.option, f.path);
-    if (f.format == MapFormat::grid) out.emplace_back(f.option, io::ros_map_image_path(f.path));
+    if (f.format != MapFormat::grid) continue;
+    (void)io::ros_map_image_entry(f.path);  // a name the YAML cannot hold: refused before work
+    out.emplace_back(f.option, io::ros_map_image_path(f.path));
   }
   return out;
 }
@@ -201,7 +206,8 @@ void note_empty_map(const std::string& input, std::size_t clouds, std::size_t po
 inline void print_written(const std::vector<std::string>& written) {
   if (written.empty()) return;
   std::string line = "wrote";
-  for (std::size_t i = 0; i < written.size(); ++i) line += (i ? ", " : " ") + written[i];
+  for (std::size_t i = 0; i < written.size(); ++i)
+    line += (i ? ", " : " ") + io::printable(written[i]);
   std::printf("%s\n", line.c_str());
 }
 
@@ -226,9 +232,15 @@ struct MapFileContext {
 /// summary line. io::Error naming the file when no known voxel lies in the band.
 inline std::string write_grid_file(const OccupancyMap<OcKey>& map, const std::string& path,
                                    const MapFileContext& c) {
-  const auto [lo, hi] = *c.band;
-  const OccupancyGrid2D g =
-      project_height_band(map, PlaneFrame::with_up(c.up.axis, c.up.sign), lo, hi);
+  const double lo = c.band->first, hi = c.band->second;  // captured below (not a binding)
+  OccupancyGrid2D g;
+  try {
+    g = within_memory(path, "making the 2D grid", [&] {
+      return project_height_band(map, PlaneFrame::with_up(c.up.axis, c.up.sign), lo, hi);
+    });
+  } catch (const std::invalid_argument& e) {  // more cells than a grid may have
+    throw io::Error(path, std::string(e.what()) + "; a coarser --res makes fewer");
+  }
   if (g.empty()) {
     double min = std::numeric_limits<double>::infinity(), max = -min;
     map.for_each_voxel([&](const OcKey& k, float) {
@@ -242,7 +254,7 @@ inline std::string write_grid_file(const OccupancyMap<OcKey>& map, const std::st
                   lo, hi, c.up.name().c_str(), min, max);
     throw io::Error(path, text);
   }
-  io::write_ros_map(path, g);
+  within_memory(path, "writing the 2D grid", [&] { io::write_ros_map(path, g); });
   std::size_t n[3] = {0, 0, 0};  // occupied, free, unknown
   for (const std::int8_t cell : g.cells)
     ++n[cell == OccupancyGrid2D::kOccupied ? 0 : cell == OccupancyGrid2D::kFree ? 1 : 2];
@@ -250,8 +262,8 @@ inline std::string write_grid_file(const OccupancyMap<OcKey>& map, const std::st
   std::snprintf(line, sizeof line,
                 "grid %s: %zu x %zu cells of %g m, up %s, heights %g:%g m: occupied %zu free %zu "
                 "unknown %zu",
-                path.c_str(), g.width, g.height, g.resolution, c.up.name().c_str(), lo, hi, n[0],
-                n[1], n[2]);
+                io::printable(path).c_str(), g.width, g.height, g.resolution, c.up.name().c_str(),
+                lo, hi, n[0], n[1], n[2]);
   return line;
 }
 

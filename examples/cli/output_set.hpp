@@ -1,8 +1,8 @@
 #pragma once
 // A command's output files, checked before any work: each named (not ""), in an existing,
-// writable folder, not a folder itself, and no two the same file; temporaries of them that a
-// killed run left behind are removed (io::remove_stale_temporaries). Writing them then happens in
-// an io::CommitGroup, so a failure leaves every target as it was.
+// writable folder, not a folder itself, not a read-only file, and no two the same file; temporaries
+// of them that a killed run left behind are removed (io::remove_stale_temporaries). Writing them
+// then happens in an io::CommitGroup, so a failure leaves every target as it was.
 
 #include <cerrno>
 #include <cstdio>
@@ -44,7 +44,8 @@ inline std::filesystem::path output_identity(const std::string& path) {
 }  // namespace detail
 
 /// Throws UsageError (bad names, one file given twice) or io::Error (a folder that is missing
-/// or not writable, a target that is a folder) naming the output; a device or FIFO is accepted.
+/// or not writable, a target that is a folder or a read-only file) naming the output; a device or
+/// FIFO is accepted.
 inline void check_outputs(const OutputList& outputs) {
   namespace fs = std::filesystem;
   std::vector<std::pair<std::string, fs::path>> seen;
@@ -64,6 +65,15 @@ inline void check_outputs(const OutputList& outputs) {
       throw io::Error(path, "folder '" + dir.string() + "' is not writable (" + option + ")");
     if (special && ::access(path.c_str(), W_OK) != 0)
       throw io::Error(path, "is not writable (" + option + ")");
+    // A read-only file is kept, as cp and install keep it: replacing it takes a deliberate step.
+    // Root may write any file, so for root the mode's write bits decide.
+    constexpr auto kAnyWrite =
+        fs::perms::owner_write | fs::perms::group_write | fs::perms::others_write;
+    if (fs::is_regular_file(st) &&
+        (::access(path.c_str(), W_OK) != 0 || (st.permissions() & kAnyWrite) == fs::perms::none))
+      throw io::Error(path, "is read-only (" + option +
+                                "); nothing was written: make it writable (chmod u+w) or remove "
+                                "it to replace it");
 #endif
     const fs::path id = detail::output_identity(path);
     for (const auto& [other, other_id] : seen) {

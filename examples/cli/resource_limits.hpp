@@ -149,6 +149,18 @@ inline void check_tree_resolution(const std::string& path, double res) {
 inline constexpr std::size_t kBrickBytesAtLeast =
     sizeof(OccupancyMap<OcKey>::Brick) + 2 * (sizeof(std::uint64_t) + sizeof(std::uint32_t));
 
+/// f(), the work on `path` that `doing` names ("reading it"); running out of memory in it
+/// becomes one io::Error naming the file and --memory-limit.
+template <class F>
+auto within_memory(const std::string& path, const char* doing, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const std::bad_alloc&) {  // MemoryLimitError included
+    throw io::Error(path, "out of memory (--memory-limit " + format_bytes(memory_limit_bytes()) +
+                              ") " + doing + "; a higher --memory-limit may let it fit");
+  }
+}
+
 /// read() (which reads `path`); running out of memory in it becomes one io::Error naming the
 /// file and --memory-limit.
 template <class Read>
@@ -163,9 +175,10 @@ auto reading(const std::string& path, Read&& read) -> decltype(read()) {
 
 /// A .bt/.ot map as the tool reads it: resolution checked, memory bounded by the map's share of
 /// --memory-limit; a tree too large for it, or running out while reading it, is one io::Error
-/// naming the file and --memory-limit.
+/// naming the file and --memory-limit. With `colors`, a ColorOcTree's colours go there.
 inline OccupancyMap<OcKey> read_tree_checked(const std::string& path,
-                                             const OccupancyParams& params = {}) {
+                                             const OccupancyParams& params = {},
+                                             io::OctreeColors* colors = nullptr) {
   const io::OctreeInfo info = io::inspect_octree(path);
   check_tree_resolution(path, info.resolution);
   const double limit = memory_limit_bytes(), share = double(map_memory_share(limit));
@@ -178,7 +191,9 @@ inline OccupancyMap<OcKey> read_tree_checked(const std::string& path,
                               "; a higher --memory-limit reads it");
   io::OctreeReadOptions options = tree_read_options();
   options.params = params;  // the clamping of the map it becomes (--clamp)
-  return reading(path, [&] { return io::read_octree(path, options); });
+  return reading(path, [&] {
+    return colors ? io::read_octree_colors(path, options, *colors) : io::read_octree(path, options);
+  });
 }
 
 /// The part of each ray from `origin` that a scan stores, as the map sees it: endpoints beyond

@@ -168,7 +168,12 @@ inline std::string json_string(const std::string& s) {
       o += "\\u003c";
       continue;
     }
-    if (static_cast<unsigned char>(c) < 0x20) continue;
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {  // a name's tab or newline kept
+      char u[8];
+      std::snprintf(u, sizeof u, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+      o += u;
+      continue;
+    }
     o += c;
   }
   return o + "\"";

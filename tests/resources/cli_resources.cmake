@@ -1,7 +1,8 @@
 # The tool's resource and output probes (tests/resources/cli_resources.sh): outputs checked before
 # the work, written through unique temporaries, never replacing a device or an input, removed on
 # SIGTERM or at the next start; stdout write errors; threads; oversized headers; the memory limit;
-# control bytes escaped, corrections checked against the keyframes, unmappable values refused.
+# control bytes escaped, corrections checked against the keyframes, unmappable values refused;
+# file names in text outputs (a 2D grid's YAML), empty keyframes, read-only outputs.
 find_program(KNNOCC_BASH bash)
 if(TARGET knnocc_tool AND KNNOCC_BASH)
   set(KNNOCC_RESOURCE_CASES
@@ -14,7 +15,9 @@ if(TARGET knnocc_tool AND KNNOCC_BASH)
     output_is_input control_bytes_escaped corrections_checked corrections_velodyne_frame
     corrections_key_range_note
     unmappable_values save_every_resumes stale_temporaries_removed
-    corrections_outputs_all_or_none dangling_link_keeps_user_files heldout_repeated_id)
+    corrections_outputs_all_or_none dangling_link_keeps_user_files heldout_repeated_id
+    grid_yaml_names empty_keyframe_with_ids heldout_nothing_to_score errors_name_the_file
+    read_only_output sigpipe_removes_temporaries)
   foreach(_case IN LISTS KNNOCC_RESOURCE_CASES)
     add_test(NAME cli.resources.${_case}
       COMMAND "${KNNOCC_BASH}" "${CMAKE_CURRENT_LIST_DIR}/cli_resources.sh"

@@ -374,6 +374,97 @@ case "$CASE" in
     printf 'ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nproperty uint id\nend_header\n1 0 0 5\n1 1 0 5\n' > seq/clouds/000001.ply
     expect 2 "seq/clouds/000001.ply: .*map-point id 5 appears twice" "$K" eval --heldout seq --folds 2
     [ ! -s out.txt ] || fail "a result line before the error" ;;
+  grid_yaml_names)  # a 2D grid's YAML names its image whatever the file name holds (PyYAML reads it back)
+    python3 -c 'import yaml' 2> /dev/null || { echo "SKIPPED: python3-yaml (import yaml) is missing"; exit 0; }
+    names=('lab #2' 'map: v2' '[old] lab' '#h' '- map' $'new\nline' "'q'" '"dq"' 'a{b}' 'x&y' '*s'
+           '!t' '%p' '@a' 'b\c' $'t\tab' 'café' '? q' '|x' '>y' ' lead' 'trail ' $'c1\xc2\x85' $'ls\xe2\x80\xa8')
+    for n in "${names[@]}"; do
+      expect 0 "" "$K" map --input p.xyz --res 0.1 -o "$n.yaml" --grid-z -1:2 --up z
+    done
+    python3 - "${names[@]}" <<'PY' || fail "a YAML does not name its image"
+import os, sys, yaml
+for n in sys.argv[1:]:
+    with open(n + ".yaml", encoding="utf-8") as f:
+        image = yaml.safe_load(f)["image"]
+    assert image == n + ".pgm", (n, image)
+    assert os.path.isfile(image), image
+print(len(sys.argv) - 1, "YAML files name their images")
+PY
+    "$K" map --input p.xyz --res 0.1 --out-bt m.bt > /dev/null || fail "map"
+    expect 0 "" "$K" convert m.bt $'conv #1\n.yaml' --grid-z -1:2 --up z
+    python3 -c 'import yaml; assert yaml.safe_load(open("conv #1\n.yaml"))["image"] == "conv #1\n.pgm"' ||
+      fail "convert's YAML"
+    expect 2 "bad\\\\xff.yaml: the image name 'bad\\\\xff.pgm' is not valid UTF-8" \
+      "$K" map --input p.xyz --res 0.1 -o $'bad\xff.yaml' --grid-z -1:2
+    [ -z "$(ls | grep '^bad')" ] || fail "a file of the refused name was written"
+    # a view page keeps a name's tab and newline as JSON escapes
+    expect 0 "" "$K" view m.bt --names $'tab\there\nnl' -o page.html
+    grep -q '"name":"tab\\u0009here\\u000anl"' page.html || fail "the page's name lost its escapes" ;;
+  empty_keyframe_with_ids)  # an empty keyframe whose PLY declares `uint id` carries ids
+    mkdir -p seq/clouds && printf '0 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n2 0 0 0 0 0 0 1\n3 0 0 0 0 0 0 1\n' > seq/poses.txt
+    for i in 0 1 3; do printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty uint id\nend_header\n1 0 0 7\n1 1 0 8\n0 1 1 9\n' > seq/clouds/00000$i.ply; done
+    printf 'ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nproperty uint id\nend_header\n' > seq/clouds/000002.ply
+    expect 0 "" "$K" map --input seq --res 0.1 --model robust --out-voxels v.txt
+    ! grep -q "needs map-point ids" err.txt || fail "robust warned of missing ids"
+    "$K" info seq/clouds/000002.ply | grep -q "^ids: yes$" || fail "info: $("$K" info seq/clouds/000002.ply)"
+    expect 0 "" "$K" eval --heldout seq --folds 2 --model robust
+    grep -q "^heldout robust   folds 2 points 3 recall" out.txt || fail "eval --heldout: $(cat out.txt)"
+    expect 0 "" "$K" eval --ids seq
+    grep -q "^map_points 3 " out.txt || fail "eval --ids: $(cat out.txt)"
+    expect 0 "" "$K" convert seq/clouds/000002.ply copy.ply
+    grep -aq "^property uint id" copy.ply || fail "convert dropped the id property of an empty cloud"
+    # a cloud without the property among clouds with it: refused as before
+    printf 'ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 0 0\n' > seq/clouds/000001.ply
+    expect 2 "seq/clouds/000001.ply: .*with and without ids" "$K" map --input seq --res 0.1 --model knn
+    expect 2 "seq/clouds/000001.ply: no map-point ids" "$K" eval --heldout seq --folds 2 ;;
+  heldout_nothing_to_score)  # no point seen by --min-views held-out keyframes: exit 2, no score
+    "$K" sim --out seq --seed 3 --keyframes 4 > /dev/null || fail "sim"
+    expect 2 "seq: nothing to score: no map point is seen by --min-views 2 held-out keyframes of one fold \(4 keyframes in --folds 4: at most 1 see one point\)" \
+      "$K" eval --heldout seq --folds 4 --model octomap
+    [ ! -s out.txt ] || fail "a score was printed: $(cat out.txt)"
+    expect 2 "seq: nothing to score: no map point is seen by --min-views 9 held-out keyframes" \
+      "$K" eval --heldout seq --folds 2 --min-views 9 --model octomap
+    [ ! -s out.txt ] || fail "a score was printed: $(cat out.txt)"
+    expect 0 "" "$K" eval --heldout seq --folds 2 --model octomap
+    expect 2 "seq/poses.txt: is not a folder: a sequence is a folder" "$K" eval --heldout seq/poses.txt
+    expect 2 "nope: sequence folder does not exist" "$K" eval --heldout nope ;;
+  errors_name_the_file)  # an oversized 2D grid and running out of memory name the file
+    printf -- '-3000 -3000 0.5\n3000 3000 0.5\n' > far.xyz
+    expect 2 "^knnocc map: far.yaml: the 2D grid of the height band would have 60001 x 60001 cells" \
+      "$K" map --input far.xyz --res 0.1 -o far.yaml --grid-z 0:1 --up z
+    [ ! -e far.yaml ] && [ ! -e far.pgm ] || fail "a grid file was written"
+    [ -z "${KNNOCC_TOOL_SANITIZED:-}" ] || { echo "SKIPPED: sanitizer build, no address-space limit"; exit 0; }
+    printf -- '0 0 0.5\n2000 2000 0.5\n' > wide.xyz
+    "$K" map --input wide.xyz --res 0.1 --out-bt wide.bt > /dev/null || fail "map"
+    expect 2 "^knnocc convert: wide.yaml: out of memory \(--memory-limit 200 MB\)" \
+      "$K" convert wide.bt wide.yaml --grid-z 0:1 --up z --memory-limit 200M
+    no_temporaries ;;
+  read_only_output)  # a read-only output is kept, as cp keeps it: exit 2, nothing written
+    "$K" map --input p.xyz --res 0.1 --out-bt m.bt > /dev/null || fail "map"
+    for f in ro.bt ro.ply ro.html ro.yaml ro.pgm; do echo old > $f; done
+    chmod 444 ro.bt ro.ply ro.html ro.pgm
+    expect 2 "^knnocc map: ro.bt: is read-only \(--out-bt\); nothing was written" \
+      "$K" map --input p.xyz --res 0.1 --out-voxels v.txt --out-bt ro.bt
+    expect 2 "^knnocc convert: ro.ply: is read-only \(OUT\)" "$K" convert m.bt ro.ply
+    expect 2 "^knnocc view: ro.html: is read-only \(--out\)" "$K" view m.bt -o ro.html
+    expect 2 "^knnocc map: ro.pgm: is read-only \(-o\)" "$K" map --input p.xyz --res 0.1 -o ro.yaml --grid-z -1:2
+    ln -s ro.bt link.bt
+    expect 2 "link.bt: is read-only" "$K" convert m.bt link.bt
+    for f in ro.bt ro.ply ro.html ro.yaml ro.pgm; do [ "$(cat $f)" = old ] || fail "$f replaced"; done
+    [ ! -e v.txt ] || fail "v.txt written"
+    chmod 644 ro.bt && expect 0 "" "$K" convert m.bt ro.bt
+    cmp -s m.bt ro.bt || fail "a writable output not replaced"
+    no_temporaries ;;
+  sigpipe_removes_temporaries)  # SIGPIPE (a closed pipe) mid-run: temporaries removed, as SIGTERM
+    "$K" sim --out big --keyframes 100000 > /dev/null 2>&1 &
+    pid=$!
+    for i in $(seq 50); do ls -a | grep -q 'big\.tmp-' && break; sleep 0.1; done
+    ls -a | grep -q 'big\.tmp-' || fail "no staging folder seen"
+    sleep 0.5
+    kill -PIPE $pid; wait $pid; rc=$?
+    [ $rc = 141 ] || fail "exit $rc after SIGPIPE, expected 141 (killed by the signal)"
+    [ ! -e big ] || fail "big/ exists after SIGPIPE"
+    no_temporaries ;;
   *) fail "unknown case $CASE" ;;
 esac
 echo PASS

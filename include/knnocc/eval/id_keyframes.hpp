@@ -23,7 +23,7 @@ std::vector<IdKeyframe> id_keyframes(const io::Sequence& seq, double crop, Check
   std::vector<IdKeyframe> out(seq.size());
   for (std::size_t i = 0; i < seq.size(); ++i) {
     const io::Cloud cloud = seq.load_cloud(i);
-    if (cloud.ids.empty())
+    if (!cloud.has_ids())
       throw io::Error(seq.cloud_path(i), "no map-point ids (an `id` vertex property)");
     check(i, cloud);
     io::keyframe_to_world(seq.pose(i), cloud, crop, out[i].points, out[i].ids, &out[i].evidence);

@@ -124,14 +124,18 @@ class CommitGroupBase {
 };
 }  // namespace detail
 
-/// Removes every temporary knnocc is writing when SIGINT, SIGTERM or SIGHUP arrives, then dies of
-/// the signal as it would have (a signal the process ignores stays ignored). For programs: the
-/// library never installs it by itself.
+/// Removes every temporary knnocc is writing when SIGINT, SIGTERM, SIGHUP or SIGPIPE (a closed
+/// pipe on stdout or stderr) arrives, then dies of the signal as it would have (a signal the
+/// process ignores stays ignored). For programs: the library never installs it by itself.
 inline void remove_temporaries_on_signal() {
   for (int sig : {SIGINT, SIGTERM
 #ifdef SIGHUP
                   ,
                   SIGHUP
+#endif
+#ifdef SIGPIPE
+                  ,
+                  SIGPIPE
 #endif
        }) {
     auto old = std::signal(sig, detail::temporaries_signal_handler);

@@ -24,6 +24,13 @@ struct Cloud {
   // `observations` (PLY vertex properties, core/point_evidence.hpp; absent ones read 0); empty
   // otherwise.
   std::vector<PointEvidence> evidence;
+  // Whether the file's format declares an id property (a PLY vertex `id`, a PCD field `id`), so
+  // that a cloud of zero points still says whether its keyframe carries ids.
+  bool ids_declared = false;
+
+  /// The cloud carries map-point ids: the format declares them (even for zero points), or ids
+  /// are set. Ids are a property of the format, not of the point count.
+  bool has_ids() const { return ids_declared || !ids.empty(); }
 };
 
 /// Drops the points farther than `crop` from the sensor (the cloud in the sensor frame; the
@@ -31,6 +38,7 @@ struct Cloud {
 /// paper's "keep points within 4 m". crop <= 0 (or NaN): nothing dropped.
 inline void crop_cloud(Cloud& c, double crop) {
   if (!(crop > 0.0)) return;
+  c.ids_declared = c.has_ids();  // a keyframe cropped to nothing still carries ids
   std::size_t kept = 0;
   for (std::size_t j = 0; j < c.points.size(); ++j) {
     const Point3f& p = c.points[j];

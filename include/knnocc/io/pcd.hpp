@@ -265,6 +265,7 @@ inline Cloud pcd_gather(const std::string& path, const PcdHeader& h, std::size_t
         Point3f{pcd_coord(base[0] + i * stride[0], fx), pcd_coord(base[1] + i * stride[1], fy),
                 pcd_coord(base[2] + i * stride[2], fz)};
   }
+  cloud.ids_declared = h.id >= 0;
   if (h.id >= 0) {
     const PcdField& fi = h.fields[static_cast<std::size_t>(h.id)];
     cloud.ids.resize(n);
@@ -288,6 +289,7 @@ inline Cloud pcd_gather(const std::string& path, const PcdHeader& h, std::size_t
 struct PcdFieldBlocks {
   PcdFieldBlocks(const std::string& file, const PcdHeader& h, std::size_t n) : path(file) {
     cloud.points.resize(n);
+    cloud.ids_declared = h.id >= 0;
     if (h.id >= 0) cloud.ids.resize(n);
     if (h.rgb >= 0) cloud.colors.resize(n);
     const int slots[5] = {h.x, h.y, h.z, h.id, h.rgb};
@@ -439,6 +441,7 @@ inline Cloud read_pcd_ascii(const std::string& path, const PcdHeader& h, const c
   const std::size_t n = static_cast<std::size_t>(points);
   Cloud cloud;
   cloud.points.resize(n);
+  cloud.ids_declared = h.id >= 0;
   if (h.id >= 0) cloud.ids.resize(n);
   if (h.rgb >= 0) cloud.colors.resize(n);
   const std::size_t tx = h.fields[static_cast<std::size_t>(h.x)].first_token;

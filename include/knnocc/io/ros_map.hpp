@@ -3,7 +3,7 @@
 // ROS map_server maps (what map_server, map_saver and Nav2's map_server load): NAME.yaml plus
 // the image it names, here NAME.pgm (binary greyscale "P5").
 //
-//   image: NAME.pgm
+//   image: "NAME.pgm"         double-quoted and escaped: any file name reads back as itself
 //   mode: trinary
 //   resolution: 0.05
 //   origin: [x, y, 0.0]       the outer corner of the bottom-left pixel, yaw 0
@@ -30,6 +30,7 @@
 #include "../map/occupancy_grid_2d.hpp"
 #include "atomic_file.hpp"
 #include "detail/file_text.hpp"
+#include "detail/yaml_scalar.hpp"
 #include "error.hpp"
 
 namespace knnocc::io {
@@ -41,11 +42,25 @@ inline std::string ros_map_image_path(const std::string& yaml_path) {
   return std::filesystem::path(yaml_path).replace_extension(".pgm").string();
 }
 
+/// The image name as the YAML's `image:` value (a double-quoted scalar); io::Error naming the
+/// YAML when the name is not valid UTF-8 (no YAML text can name that file). The tool calls it
+/// before any work.
+inline std::string ros_map_image_entry(const std::string& yaml_path) {
+  const std::string name = std::filesystem::path(ros_map_image_path(yaml_path)).filename().string();
+  std::string quoted;
+  if (!detail::yaml_double_quoted(name, quoted))
+    throw Error(yaml_path, "the image name '" + name +
+                               "' is not valid UTF-8, which a YAML file cannot name; choose "
+                               "another name");
+  return quoted;
+}
+
 /// Writes NAME.yaml and NAME.pgm (see the file comment); inside an open CommitGroup the two
 /// files join it, else they are committed together here. An empty grid is an io::Error.
 inline void write_ros_map(const std::string& yaml_path, const OccupancyGrid2D& grid) {
   if (grid.empty()) throw Error(yaml_path, "the 2D grid is empty: nothing to write");
   const std::string image = ros_map_image_path(yaml_path);
+  const std::string image_entry = ros_map_image_entry(yaml_path);
   std::string pgm = "P5\n# knnocc occupancy grid, " + std::to_string(grid.resolution) +
                     " m/pixel\n" + std::to_string(grid.width) + " " + std::to_string(grid.height) +
                     "\n255\n";
@@ -61,19 +76,19 @@ inline void write_ros_map(const std::string& yaml_path, const OccupancyGrid2D& g
                                                             : kRosUnknownPixel);
     }
   }
-  char yaml[512];
-  std::snprintf(yaml, sizeof yaml,
-                "image: %s\nmode: trinary\nresolution: %.9g\norigin: [%.9g, %.9g, 0.0]\n"
-                "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
-                std::filesystem::path(image).filename().c_str(), grid.resolution, grid.origin[0],
-                grid.origin[1]);
+  char numbers[256];
+  std::snprintf(numbers, sizeof numbers,
+                "mode: trinary\nresolution: %.9g\norigin: [%.9g, %.9g, 0.0]\nnegate: 0\n"
+                "occupied_thresh: 0.65\nfree_thresh: 0.196\n",
+                grid.resolution, grid.origin[0], grid.origin[1]);
+  const std::string yaml = "image: " + image_entry + "\n" + numbers;
   std::optional<CommitGroup> group;
   if (!detail::current_group()) group.emplace();
   AtomicFile pgm_file(image);
   pgm_file.write(pgm);
   pgm_file.commit();
   AtomicFile yaml_file(yaml_path);
-  yaml_file.write(std::string(yaml));
+  yaml_file.write(yaml);
   yaml_file.commit();
   if (group) group->commit();
 }
@@ -152,7 +167,7 @@ inline OccupancyGrid2D read_ros_map(const std::string& yaml_path) {
       if (!detail::parse_real_token(text.data(), text.data() + text.size(), out)) throw bad();
     };
     if (key == "image") {
-      image = value;
+      if (!detail::yaml_scalar(value.data(), value.data() + value.size(), image)) throw bad();
     } else if (key == "resolution") {
       number(value, grid.resolution);
       have_res = grid.resolution > 0;

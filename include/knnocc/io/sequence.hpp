@@ -46,7 +46,10 @@ class Sequence {
     namespace fs = std::filesystem;
     std::error_code ec;
     const fs::path root(dir);
-    if (!fs::is_directory(root, ec)) throw Error(dir, "sequence folder does not exist");
+    if (!fs::is_directory(root, ec))
+      throw Error(dir, fs::exists(root, ec) ? "is not a folder: a sequence is a folder holding "
+                                              "poses.txt and clouds/ (or velodyne/)"
+                                            : "sequence folder does not exist");
     const fs::path poses_file = root / "poses.txt";
     if (!fs::is_regular_file(poses_file, ec)) {
       throw Error(poses_file.string(), "missing poses.txt in sequence folder");

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <random>
@@ -448,6 +449,68 @@ TEST_CASE("octomap_tree.ColorOcTree .ot: liboctomap reads every voxel's value an
     std::ostringstream bytes;
     plain.write(bytes);
     CHECK(io::encode_color_ot(map, [](const OcKey&) { return std::nullopt; }) == bytes.str());
+  }
+}
+
+TEST_CASE("octomap_tree.read_octree_colors: a written ColorOcTree's colours read back exactly") {
+  const OccupancyMap<OcKey> map = mixed_map(3);
+  const std::string path = tree_file("colors_back.ot");
+  io::write_color_ot(path, map, test_color);
+  io::OctreeColors colors;
+  const OccupancyMap<OcKey> back = io::read_octree_colors(path, {}, colors);
+  CHECK(colors.color_tree);
+  CHECK(colors.free_colored_voxels == 0);
+  std::size_t expected = 0, wrong = 0;
+  map.for_each_voxel([&](const OcKey& k, float v) {
+    const auto c = test_color(k);
+    if (map.is_occupied(v) && c && *c != knnocc::Rgb{255, 255, 255}) ++expected;
+  });
+  for (const auto& [k, c] : colors.voxels) {
+    const auto v = map.logodds(k);
+    wrong += !v || !map.is_occupied(*v) || test_color(k) != c;
+  }
+  CHECK(expected > 1000);
+  CHECK(colors.voxels.size() == expected);
+  CHECK(wrong == 0);
+  // Written again from what was read: the same bytes.
+  std::map<std::uint64_t, knnocc::Rgb> by_key;
+  for (const auto& [k, c] : colors.voxels) by_key[k.pack()] = c;
+  CHECK(io::encode_color_ot(back, [&](const OcKey& k) -> std::optional<knnocc::Rgb> {
+          const auto it = by_key.find(k.pack());
+          if (it == by_key.end()) return std::nullopt;
+          return it->second;
+        }) == io::encode_color_ot(map, test_color));
+  // A plain OcTree and a .bt have no colours.
+  io::write_ot(path, map);
+  io::read_octree_colors(path, {}, colors);
+  CHECK(!colors.color_tree);
+  CHECK(colors.voxels.empty());
+}
+
+TEST_CASE("octomap_tree.read_octree_colors: liboctomap's pruned and free coloured leaves") {
+  octomap::ColorOcTree color(0.1);
+  // Eight occupied siblings of one colour, pruned by liboctomap into one leaf at depth 15.
+  for (int i = 0; i < 8; ++i) {
+    const octomap::OcTreeKey k(1000 + (i & 1), 2000 + ((i >> 1) & 1), 3000 + ((i >> 2) & 1));
+    color.updateNode(k, true);
+    color.updateNode(k, true);
+    color.setNodeColor(k, 10, 20, 30);
+  }
+  color.prune();
+  // One free voxel with a colour; one occupied voxel without (white).
+  color.updateNode(octomap::OcTreeKey(500, 500, 500), false);
+  color.setNodeColor(octomap::OcTreeKey(500, 500, 500), 1, 2, 3);
+  color.updateNode(octomap::OcTreeKey(600, 600, 600), true);
+  const std::string path = tree_file("color_pruned.ot");
+  REQUIRE(color.write(path));
+  io::OctreeColors colors;
+  const auto map = io::read_octree_colors(path, {}, colors);
+  CHECK(colors.color_tree);
+  CHECK(colors.free_colored_voxels == 1);
+  REQUIRE(colors.voxels.size() == 8);
+  for (const auto& [k, c] : colors.voxels) {
+    CHECK(c == knnocc::Rgb{10, 20, 30});
+    CHECK(map.is_occupied(*map.logodds(k)));
   }
 }
 

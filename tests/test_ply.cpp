@@ -142,7 +142,7 @@ TEST_CASE("io.ply SLAM counters written back with ids and colours, binary and as
                  "SLAM counters for"));
 }
 
-TEST_CASE("io.ply colours: uchar red green blue read and written, other colour types skipped") {
+TEST_CASE("io.ply colours: uchar red green blue read and written") {
   ScratchDir dir("ply_colours");
   io::Cloud cloud;
   cloud.points = sample_points();
@@ -173,14 +173,7 @@ TEST_CASE("io.ply colours: uchar red green blue read and written, other colour t
               "property uchar red\nend_header\n3 1 2 1 1 0.5 1\n255 2 0 2 2 0.5 128\n");
   const io::Cloud m = io::read_ply(mixed);
   CHECK(m.colors == std::vector<knnocc::Rgb>{{1, 2, 3}, {128, 0, 255}});
-  // Float colours, or only two channels: no colours (the points are still read).
-  const std::string floats = dir.file("float_rgb.ply");
-  write_bytes(floats,
-              "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-              "property float z\nproperty float red\nproperty float green\nproperty float blue\n"
-              "end_header\n1 2 3 0.5 0.5 0.5\n");
-  CHECK(io::read_ply(floats).colors.empty());
-  CHECK(io::read_ply(floats).points.size() == 1);
+  // Only two channels: no colours (the points are still read).
   const std::string two = dir.file("two_channels.ply");
   write_bytes(
       two,
@@ -201,6 +194,107 @@ TEST_CASE("io.ply colours: uchar red green blue read and written, other colour t
   short_colors.colors.pop_back();
   CHECK(contains(error_of([&] { io::write_ply_cloud(dir.file("short.ply"), short_colors); }),
                  "colours for"));
+}
+
+namespace {
+
+// A one-channel-type colour test: `values` (as text, one vertex each) of PLY type `type` for red,
+// green and blue, written ascii, binary little- and big-endian; returns the red channels read.
+template <class T>
+std::vector<std::vector<std::uint8_t>> colour_channels(ScratchDir& dir, const std::string& type,
+                                                       const std::vector<T>& values) {
+  std::vector<std::vector<std::uint8_t>> out;
+  for (const char* format : {"ascii", "binary_little_endian", "binary_big_endian"}) {
+    const bool big = std::string(format) == "binary_big_endian";
+    std::string bytes = "ply\nformat " + std::string(format) + " 1.0\nelement vertex " +
+                        std::to_string(values.size()) +
+                        "\nproperty float x\nproperty float y\nproperty float z\nproperty " + type +
+                        " red\nproperty " + type + " green\nproperty " + type +
+                        " blue\nend_header\n";
+    for (const T v : values) {
+      if (std::string(format) == "ascii") {
+        std::ostringstream line;
+        line.precision(17);
+        line << "1 2 3 " << +v << ' ' << +v << ' ' << +v << '\n';
+        bytes += line.str();
+      } else {
+        for (const float c : {1.0f, 2.0f, 3.0f}) put(bytes, c, big);
+        for (int k = 0; k < 3; ++k) put(bytes, v, big);
+      }
+    }
+    const std::string p = dir.file(type + "_" + format + ".ply");
+    write_bytes(p, bytes);
+    const io::Cloud c = io::read_ply(p);
+    REQUIRE(c.colors.size() == values.size());
+    std::vector<std::uint8_t> red;
+    for (const knnocc::Rgb& rgb : c.colors) {
+      CHECK(rgb.g == rgb.r);
+      CHECK(rgb.b == rgb.r);
+      red.push_back(rgb.r);
+    }
+    out.push_back(red);
+  }
+  return out;
+}
+
+using Bytes = std::vector<std::uint8_t>;
+
+}  // namespace
+
+TEST_CASE("io.ply colours of every type scaled to 0..255, ascii and both endians") {
+  ScratchDir dir("ply_colour_types");
+  const auto same = [](const std::vector<Bytes>& got, const Bytes& want) {
+    for (const Bytes& g : got) CHECK(g == want);
+  };
+  // uchar as is; ushort on the 16-bit scale (x 255/65535, rounded).
+  same(colour_channels<std::uint8_t>(dir, "uchar", {0, 1, 128, 255}), {0, 1, 128, 255});
+  same(colour_channels<std::uint8_t>(dir, "uint8", {7, 200}), {7, 200});
+  same(colour_channels<std::uint16_t>(dir, "ushort", {0, 128, 129, 257, 32896, 65535}),
+       {0, 0, 1, 1, 128, 255});
+  same(colour_channels<std::uint16_t>(dir, "uint16", {65535, 0}), {255, 0});
+  // Other integer types on the 0..255 scale: negative 0, above 255 clamped to 255.
+  same(colour_channels<std::int8_t>(dir, "char", {-128, -1, 0, 77, 127}), {0, 0, 0, 77, 127});
+  same(colour_channels<std::int16_t>(dir, "short", {-5, 0, 200, 255, 256, 32767}),
+       {0, 0, 200, 255, 255, 255});
+  same(colour_channels<std::int32_t>(dir, "int", {-70000, 3, 255, 70000}), {0, 3, 255, 255});
+  same(colour_channels<std::uint32_t>(dir, "uint", {0, 254, 4294967295u}), {0, 254, 255});
+  // float and double on 0..1, rounded; beyond it clamped, NaN 0.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  same(colour_channels<float>(dir, "float", {0.0f, 0.5f, 1.0f / 255, 0.998f, 1.0f, 1.5f, -0.2f}),
+       {0, 128, 1, 254, 255, 255, 0});
+  same(colour_channels<double>(dir, "double", {0.25, 1.0, 2.0, -1.0}), {64, 255, 255, 0});
+  const std::vector<Bytes> with_nan = colour_channels<float>(dir, "float32", {nan, 0.2f});
+  for (const Bytes& b : with_nan) CHECK(b == Bytes{0, 51});
+}
+
+TEST_CASE("io.ply colours of mixed types, and ascii tokens that are no value of their type") {
+  ScratchDir dir("ply_colour_mixed");
+  const std::string mixed = dir.file("mixed_types.ply");
+  write_bytes(mixed,
+              "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+              "property float z\nproperty float red\nproperty ushort green\nproperty int "
+              "blue\nend_header\n1 2 3 0.2 65535 9\n");
+  CHECK(io::read_ply(mixed).colors == std::vector<knnocc::Rgb>{{51, 255, 9}});
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+      "property float z\n";
+  for (const auto& [type, token] :
+       std::vector<std::pair<std::string, std::string>>{{"uchar", "256"},
+                                                        {"char", "128"},
+                                                        {"ushort", "-1"},
+                                                        {"ushort", "65536"},
+                                                        {"short", "40000"},
+                                                        {"int", "1.5"},
+                                                        {"float", "red"}}) {
+    CAPTURE(type);
+    CAPTURE(token);
+    const std::string p = dir.file("bad_" + type + ".ply");
+    write_bytes(p, head + "property " + type + " red\nproperty " + type + " green\nproperty " +
+                       type + " blue\nend_header\n1 2 3 1 " + token + " 1\n");
+    const std::string msg = error_of([&] { io::read_ply(p); });
+    CHECK(contains(msg, p));
+    CHECK(contains(msg, "as a colour of type"));
+  }
 }
 
 TEST_CASE("io.ply ascii with extra properties, comments, CRLF header and a face element") {

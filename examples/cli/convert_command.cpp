@@ -23,6 +23,7 @@
 #include "commands.hpp"
 #include "common_options.hpp"
 #include "input_guard.hpp"
+#include "map_colors.hpp"
 #include "map_files.hpp"
 #include "map_outputs.hpp"
 #include "output_set.hpp"
@@ -46,9 +47,11 @@ maps:
        folder (knnocc map --out-tiles): .bt/.ot OUT is streamed as knnocc merge writes it;
        the other formats read it tile by tile (free voxels when --voxels or the format needs
        them and they fit --memory-limit; beyond OctoMap's key range at a coarser resolution)
-  OUT  .bt .ot             OctoMap trees (knnocc convert a.bt b.bt rewrites a.bt byte for byte)
+  OUT  .bt .ot             OctoMap trees (knnocc convert a.bt b.bt rewrites a.bt byte for byte;
+                           a ColorOcTree .ot stays one, its colours kept)
        .voxels .txt        voxel list, sorted by x, y, z (--voxels, default all)
-       .ply                voxels as points (colour = height, property logodds) or cubes
+       .ply                voxels as points (colour = a ColorOcTree's voxel colour, else
+                           height; property logodds) or cubes
        .pcd .xyz .bin      voxel centres as a point cloud (--voxels, default occupied)
        .png                top and side views, coloured by height
        .yaml               a 2D grid for ROS map_server / Nav2 (OUT and OUT's .pgm) of the
@@ -56,7 +59,10 @@ maps:
 clouds:
   IN   .ply .pcd .xyz .dat .txt .bin (KITTI), or an OctoMap .graph / a sequence folder (all
        scans moved to the world frame and merged)
-  OUT  .ply .pcd .xyz .txt .bin (ids are kept by .ply and .pcd, colours by .ply)
+  OUT  .ply .pcd .xyz .txt .bin (ids are kept by .ply and .pcd, colours by .ply; PLY colours
+       of every type are read as map --help says and written as uchar)
+Colours an OUT format cannot keep (a ColorOcTree into .bt, a coloured cloud into .xyz) are named
+in one note on stderr.
 A cloud becomes a map with a sensor model, not here: knnocc map --input IN --res R --out-bt OUT.
 Prints what was read (`map N voxels (occupied N, free N)` or `cloud N points`), then what was
 written: `wrote OUT: N occupied voxels as points` and the like.
@@ -180,14 +186,31 @@ std::size_t selected(const VoxelCounts& c, io::VoxelSelection s) {
                                          : c.occupied;
 }
 
-/// Writes the map as OUT's format and prints what OUT holds.
-void write_converted_map(const OccupancyMap<OcKey>& map, const ConvertJob& j, const Args& args) {
+/// The colours a map input had: a ColorOcTree stays one, its voxel colours go to .ply too.
+struct MapInputColors {
+  bool color_tree = false;
+  const VoxelColors<OcKey>* voxels = nullptr;  ///< null: no voxel has a colour
+};
+
+/// Writes the map as OUT's format and prints what OUT holds; says once when OUT's format cannot
+/// keep the input's colours.
+void write_converted_map(const OccupancyMap<OcKey>& map, const ConvertJob& j, const Args& args,
+                         const MapInputColors& colors = {}) {
   const std::string& out = j.out;
   const auto c = map.count_voxels();
   const bool ply_free = args.flag("--ply-free");
   const io::VoxelSelection all = j.selection("all", ply_free),
                            occ = j.selection("occupied", ply_free);
-  if (j.out_ext == ".bt" || j.out_ext == ".ot") {
+  const VoxelColorOf<OcKey> color_of = [&colors](const OcKey& k) {
+    return colors.voxels ? colors.voxels->mean(k) : std::nullopt;
+  };
+  if (colors.voxels && j.out_ext != ".ot" && j.out_ext != ".ply")
+    note_colors_not_kept("convert", j.in, "map", {out},
+                         "a format without colour; .ot and .ply keep them");
+  if (j.out_ext == ".ot" && colors.color_tree) {
+    io::write_color_ot(out, map, color_of);
+    std::printf("wrote %s: the whole map as an OctoMap tree (a ColorOcTree)\n", out.c_str());
+  } else if (j.out_ext == ".bt" || j.out_ext == ".ot") {
     j.out_ext == ".bt" ? io::write_bt(out, map) : io::write_ot(out, map);
     std::printf("wrote %s: the whole map as an OctoMap tree\n", out.c_str());
   } else if (j.out_ext == ".yaml") {
@@ -207,7 +230,7 @@ void write_converted_map(const OccupancyMap<OcKey>& map, const ConvertJob& j, co
     o.which = occ;
     o.shape = args.flag("--ply-cubes") ? io::VoxelShape::cubes : io::VoxelShape::points;
     o.binary = j.encoding != "ascii";
-    io::write_voxels_ply(out, map, o);
+    io::write_voxels_ply(out, map, o, colors.voxels ? color_of : VoxelColorOf<OcKey>());
     std::printf("wrote %s: %zu %s voxels as %s\n", out.c_str(), selected(c, occ),
                 selection_name(occ), args.flag("--ply-cubes") ? "cubes" : "points");
   } else {
@@ -231,24 +254,32 @@ io::Cloud read_cloud(const std::string& in) {
   io::Cloud cloud;
   Progress progress("convert", source.size());
   std::vector<Point3f> world;
-  bool colored = true;
+  std::size_t colored = 0;
   for (std::size_t i = 0; i < source.size(); ++i) {
     const io::Scan scan = source.load(i);
     io::transform_to_world(scan.pose, scan.cloud.points, world);
     cloud.points.insert(cloud.points.end(), world.begin(), world.end());
-    colored = colored && !scan.cloud.colors.empty();  // colours only when every scan has them
-    if (colored)
+    if (!scan.cloud.colors.empty()) ++colored;
+    if (colored == i + 1)  // colours only when every scan has them
       cloud.colors.insert(cloud.colors.end(), scan.cloud.colors.begin(), scan.cloud.colors.end());
     progress.update(i + 1);
   }
   progress.finish();
-  if (!colored) cloud.colors.clear();
+  if (colored != source.size()) cloud.colors.clear();
+  if (colored != 0 && colored != source.size())
+    std::fprintf(stderr,
+                 "knnocc convert: %s: note: %zu of its %zu scans have colours, the others none; "
+                 "the merged cloud keeps no colours\n",
+                 in.c_str(), colored, source.size());
   return cloud;
 }
 
 int convert_cloud(const ConvertJob& j) {
   const io::Cloud cloud = reading(j.in, [&] { return read_cloud(j.in); });
   const std::vector<std::uint64_t>* ids = cloud.ids.empty() ? nullptr : &cloud.ids;
+  if (!cloud.colors.empty() && j.out_ext != ".ply")
+    note_colors_not_kept("convert", j.in, "cloud", {j.out},
+                         "a format without colour; .ply keeps them");
   if (j.out_ext == ".ply")
     io::write_ply(j.out, cloud.points, ids, j.encoding != "ascii",
                   cloud.colors.empty() ? nullptr : &cloud.colors);
@@ -292,13 +323,19 @@ int run_convert(const Args& args) {
   use_memory_limit(args);
   if (!j.map_in) return convert_cloud(j);
   if (j.tile_set_in) return convert_tile_set(j, args);
+  io::OctreeColors tree;
   const OccupancyMap<OcKey> map =
       j.voxel_list_in
           ? reading(j.in, [&] { return read_voxel_list_map(j.in, args.number("--res")); })
-          : read_map_file(j.in, 0.0);
+          : read_map_file(j.in, 0.0, &tree);
   const auto c = map.count_voxels();
   std::printf("map %zu voxels (occupied %zu, free %zu)\n", c.known(), c.occupied, c.free);
-  write_converted_map(map, j, args);
+  VoxelColors<OcKey> voxel_colors(map.grid().resolution());
+  reading(j.in, [&] { add_tree_colors(voxel_colors, tree); });
+  note_free_colors("convert", j.in, tree);
+  write_converted_map(
+      map, j, args,
+      MapInputColors{tree.color_tree, voxel_colors.empty() ? nullptr : &voxel_colors});
   return 0;
 }
 

@@ -20,6 +20,7 @@
 #include "common_options.hpp"
 #include "input_guard.hpp"
 #include "live_corrections.hpp"
+#include "map_colors.hpp"
 #include "map_options.hpp"
 #include "map_outputs.hpp"
 #include "map_run.hpp"
@@ -51,7 +52,10 @@ Points are in the sensor frame, or in the world frame with --points-frame world.
 fewer than 10 % of the points lie in the map's key range in their own coordinates is an error
 naming the likely cause (a time stamp column, millimetres). Clouds with colour (PLY red green
 blue, PCD rgb/rgba) give each occupied voxel the mean colour of the points that hit it, in .ply,
-.html and .ot files (a ColorOcTree; --no-color: a plain OcTree).
+.html and .ot files (a ColorOcTree; --no-color: a plain OcTree). PLY colours of any scalar type:
+uchar as is, ushort times 255/65535, other integer types as 0..255, float/double as 0..1; values
+beyond the scale clamp to 0 or 255. An --init-map ColorOcTree keeps its colours (each voxel's
+counts as one point). Files that keep no colour (.bt, voxel lists, .png, .yaml) get one note.
 Which model for which sensor: sparse visual-SLAM keyframes with map-point ids -> robust; dense
 depth cameras / LiDAR -> octomap (knn removes far, sparser surfaces of dense clouds; robust
 without ids is octomap's model).
@@ -217,12 +221,15 @@ struct MapBudget {
   }
 };
 
-/// A new map at --res, or the --init-map map to continue.
+/// A new map at --res, or the --init-map map to continue (a ColorOcTree's colours into
+/// `colors`, unless --no-color).
 template <class Model>
-Mapper<Model> make_mapper(const MapOptions& opt, const Model& model) {
+Mapper<Model> make_mapper(const MapOptions& opt, const Model& model, io::OctreeColors& colors) {
   const MapperOptions mo{opt.max_range, opt.discretize, opt.threads, opt.occupancy};
   if (opt.init_map.empty()) return Mapper<Model>(opt.res, model, mo);
-  OccupancyMap<OcKey> init = read_tree_checked(opt.init_map, opt.occupancy);
+  OccupancyMap<OcKey> init =
+      read_tree_checked(opt.init_map, opt.occupancy, opt.scans.colors ? &colors : nullptr);
+  note_free_colors("map", opt.init_map, colors);
   if (opt.res > 0 && std::abs(init.grid().resolution() - opt.res) > 1e-12 * opt.res)
     throw io::Error(opt.init_map,
                     "resolution " + io::detail::round_trip_text(init.grid().resolution()) +
@@ -313,6 +320,13 @@ void write_map_run_files(const OccupancyMap<OcKey>& map, const Args& args, const
   c.ply = ply_export_options(args);
   c.note = note;
   write_map_files(map, opt.files, c, written, notes);
+  if (!c.colors) return;
+  std::vector<std::string> colorless;
+  for (const MapFile& f : opt.files)
+    if (!keeps_colors(f.format)) colorless.push_back(f.path);
+  note_colors_not_kept("map", opt.input, "map", colorless,
+                       std::string(colorless.size() == 1 ? "a format" : "formats") +
+                           " without colour; .ot, .ply and .html keep them");
 }
 
 /// The lines after the summary: what the map files said, and which were written.
@@ -324,7 +338,8 @@ void print_files(const std::vector<std::string>& written, const std::vector<std:
 template <class Model>
 int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   const auto t0 = std::chrono::steady_clock::now();
-  Mapper<Model> mapper = make_mapper(opt, model);
+  io::OctreeColors init_colors;
+  Mapper<Model> mapper = make_mapper(opt, model, init_colors);
   const MapBudget budget{opt.input, opt.memory_limit, map_memory_share(opt.memory_limit),
                          mapper.map().grid().resolution()};
   mapper.map().set_memory_limit(budget.share);
@@ -334,6 +349,8 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
   HeldClouds held{first_held_cloud(opt.init_map, opt.input, opt.first), last, opt.input};
   Progress progress("map", last - opt.first);
   MapRun run(opt.scans, mapper.map().grid().resolution());
+  run.add_tree_colors(init_colors);
+  init_colors = io::OctreeColors{};
   MapTotals totals;
   WorldPoints world;
   for (std::size_t i = opt.first; i < last; ++i) try {
@@ -346,7 +363,7 @@ int run_map_with(const Args& args, const MapOptions& opt, const Model& model) {
       progress.update(i + 1 - opt.first);
       if (opt.save_every && (i + 1 - opt.first) % opt.save_every == 0 && i + 1 < last)
         save_snapshot(args, mapper.map(),
-                      held_clouds_note(HeldClouds{held.first, i + 1, opt.input}));
+                      held_clouds_note(HeldClouds{held.first, i + 1, opt.input}), run.colors());
     } catch (const MemoryLimitError&) {
       throw budget.too_big(i, "the map needs more memory");
     } catch (const std::bad_alloc&) {

@@ -49,10 +49,12 @@ inline bool is_tree_file(const std::string& path) {
 }
 
 /// A tree, or a voxel list at `res` (> 0); a tree whose resolution differs from a given `res`
-/// (> 0) is refused.
-inline OccupancyMap<OcKey> read_map_file(const std::string& path, double res) {
+/// (> 0) is refused. With `colors`, a ColorOcTree's colours go there.
+inline OccupancyMap<OcKey> read_map_file(const std::string& path, double res,
+                                         io::OctreeColors* colors = nullptr) {
+  if (colors) *colors = io::OctreeColors{};
   if (!is_tree_file(path)) return reading(path, [&] { return read_voxel_list_map(path, res); });
-  OccupancyMap<OcKey> map = read_tree_checked(path);
+  OccupancyMap<OcKey> map = read_tree_checked(path, {}, colors);
   if (res > 0 && map.grid().resolution() != res)
     throw io::Error(path, "the tree's resolution is " +
                               io::detail::round_trip_text(map.grid().resolution()) +

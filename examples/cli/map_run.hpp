@@ -15,6 +15,7 @@
 #include <knnocc/core/grid.hpp>
 #include <knnocc/insertion/voxel_colors.hpp>
 #include <knnocc/io/error.hpp>
+#include <knnocc/io/octomap_tree.hpp>
 #include <knnocc/io/scan_source.hpp>
 #include <knnocc/io/trajectory.hpp>
 #include <knnocc/map/occupancy_map.hpp>
@@ -104,6 +105,11 @@ class MapRun {
   void add_colors(const Origin& origin, const Points& world,
                   const std::vector<knnocc::Rgb>& colors) {
     if (in_.colors && !colors.empty()) colors_.add_scan(origin, world, colors, in_.max_range);
+  }
+  /// An --init-map's colours (ColorOcTree), each voxel's as one point (unless --no-color).
+  void add_tree_colors(const io::OctreeColors& tree) {
+    if (in_.colors)
+      for (const auto& [key, rgb] : tree.voxels) colors_.add(key, rgb);
   }
   const VoxelColors<OcKey>* colors() const { return colors_.empty() ? nullptr : &colors_; }
 

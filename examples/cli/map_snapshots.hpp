@@ -13,6 +13,7 @@
 #include <string>
 #include <system_error>
 
+#include <knnocc/insertion/voxel_colors.hpp>
 #include <knnocc/io/atomic_file.hpp>
 #include <knnocc/io/error.hpp>
 #include <knnocc/io/octomap_tree.hpp>
@@ -75,11 +76,15 @@ inline std::size_t first_held_cloud(const std::string& init_map, const std::stri
 }
 
 /// One --save-every snapshot: the --out-bt and --out-ot files, committed together.
-inline void save_snapshot(const Args& args, const OccupancyMap<OcKey>& map,
-                          const std::string& note) {
+inline void save_snapshot(const Args& args, const OccupancyMap<OcKey>& map, const std::string& note,
+                          const VoxelColors<OcKey>* colors = nullptr) {
   io::CommitGroup group;
   if (args.has("--out-bt")) io::write_bt(args.str("--out-bt"), map, note);
-  if (args.has("--out-ot")) io::write_ot(args.str("--out-ot"), map, note);
+  if (args.has("--out-ot") && colors)
+    io::write_color_ot(
+        args.str("--out-ot"), map, [colors](const OcKey& k) { return colors->mean(k); }, note);
+  else if (args.has("--out-ot"))
+    io::write_ot(args.str("--out-ot"), map, note);
   group.commit();
 }
 

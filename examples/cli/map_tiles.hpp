@@ -323,10 +323,12 @@ int run_map_wide(const MapOptions& opt, const Model& model) {
   MapRun run(opt.scans, opt.res);
   MapTotals totals;
   tiles::WorldScan w;
+  bool coloured = false;
   Progress progress("map", last - opt.first);
   for (std::size_t i = opt.first; i < last; ++i) try {
       io::Scan scan = source.load(i);
       run.prepare(scan, mapper.map().grid(), source_path_for_errors(opt.input, i));
+      coloured = coloured || !scan.cloud.colors.empty();
       if constexpr (std::is_same_v<Model, RobustModel>)
         if (scan.cloud.ids.empty()) run.note_missing_ids();
       w.load<Mapper<Model, WideKey>>(scan);
@@ -351,6 +353,11 @@ int run_map_wide(const MapOptions& opt, const Model& model) {
     }
     group.commit();
   }
+  if (coloured && opt.scans.colors && !written.empty())
+    std::fprintf(stderr,
+                 "knnocc map: %s: note: the clouds have colours; a 21-bit map keeps none (plain "
+                 "OcTrees; with 16-bit keys an .ot is a ColorOcTree)\n",
+                 opt.input.c_str());
   const ScanStats& total = totals.scan;
   note_skipped_points(opt.input, total.nonfinite, total.out_of_range,
                       mapper.map().grid().max_coord(), mapper.map().grid().resolution());

@@ -19,6 +19,7 @@
 #include "commands.hpp"
 #include "common_options.hpp"
 #include "input_guard.hpp"
+#include "map_colors.hpp"
 #include "map_files.hpp"
 #include "map_outputs.hpp"
 #include "map_tiles.hpp"
@@ -133,7 +134,14 @@ OccupancyMap<OcKey> read_fuse_input(const std::string& in) {
     return map;
   }
   if (!is_tree_file(in)) throw io::Error(in, "not a .bt/.ot map or a tile set folder");
-  return read_tree_checked(in);
+  io::OctreeColors colors;
+  OccupancyMap<OcKey> map = read_tree_checked(in, {}, &colors);
+  if (!colors.voxels.empty())
+    std::fprintf(stderr,
+                 "knnocc merge: %s: note: its colours are not kept (--fuse adds log-odds; the "
+                 "fused map has no colours)\n",
+                 in.c_str());
+  return map;
 }
 
 /// --fuse: the per-voxel sum of the inputs' log-odds, clamped once.
@@ -217,7 +225,11 @@ int run_tile(const Args& args) {
   check_outputs_not_inputs({{"--out-tiles", dir}}, {{"MAP", in}});
   io::StagingDir::check_target(dir, tiles::is_tile_set);
   use_memory_limit(args);
-  const OccupancyMap<OcKey> map = read_tree_checked(in);
+  io::OctreeColors colors;
+  const OccupancyMap<OcKey> map = read_tree_checked(in, {}, &colors);
+  if (!colors.voxels.empty())
+    note_colors_not_kept("tile", in, "map", {dir}, "a tile set keeps none");
+  colors = io::OctreeColors{};
   const int depth = args.has("--tile-size")
                         ? depth_for_tile_size(args.number("--tile-size"), map.resolution(), 16)
                         : static_cast<int>(args.integer("--tile-depth"));

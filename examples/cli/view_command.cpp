@@ -14,6 +14,7 @@
 #include "commands.hpp"
 #include "common_options.hpp"
 #include "input_guard.hpp"
+#include "map_colors.hpp"
 #include "map_files.hpp"
 #include "output_set.hpp"
 #include "tile_set_files.hpp"
@@ -90,7 +91,9 @@ std::vector<std::string> view_names(const Args& args) {
   return names;
 }
 
-OccupancyMap<OcKey> read_view_map(const Args& args, const std::string& in) {
+/// A map to show, with a ColorOcTree's colours into `colors`.
+OccupancyMap<OcKey> read_view_map(const Args& args, const std::string& in,
+                                  io::OctreeColors& colors) {
   if (is_tile_set_path(in)) return read_tile_set_map(in, true, "view");
   const std::string ext = lower_extension(in);
   if (!is_tree_file(in) && ext != ".voxels" && ext != ".txt")
@@ -98,7 +101,7 @@ OccupancyMap<OcKey> read_view_map(const Args& args, const std::string& in) {
                      " (.bt .ot, or a voxel list .voxels/.txt)");
   if (!is_tree_file(in) && !args.has("--res"))
     throw UsageError("the voxel list " + in + " needs --res");
-  return read_map_file(in, is_tree_file(in) ? 0.0 : args.number("--res"));
+  return read_map_file(in, is_tree_file(in) ? 0.0 : args.number("--res"), &colors);
 }
 
 /// The camera positions of --path and the up they suggest (a folder's first cloud tells a camera
@@ -150,13 +153,21 @@ int run_view(const Args& args) {
                     "configure again)");
   use_memory_limit(args);
   std::vector<OccupancyMap<OcKey>> maps;
+  std::vector<VoxelColors<OcKey>> colors;  // a ColorOcTree's colours go to the page
   maps.reserve(args.positional().size());
-  for (const std::string& in : args.positional()) maps.push_back(read_view_map(args, in));
+  colors.reserve(args.positional().size());
+  for (const std::string& in : args.positional()) {
+    io::OctreeColors tree;
+    maps.push_back(read_view_map(args, in, tree));
+    colors.emplace_back(maps.back().resolution());
+    reading(in, [&] { add_tree_colors(colors.back(), tree); });
+    note_free_colors("view", in, tree);
+  }
   std::vector<ViewMap> views;
   for (std::size_t i = 0; i < maps.size(); ++i)
     views.push_back(
         {names.empty() ? std::filesystem::path(args.positional()[i]).filename().string() : names[i],
-         &maps[i]});
+         &maps[i], colors[i].empty() ? nullptr : &colors[i]});
   write_view_page(out, views, up, opt);
   std::printf("wrote %s (%zu map%s)\n", out.c_str(), maps.size(), maps.size() == 1 ? "" : "s");
   return 0;

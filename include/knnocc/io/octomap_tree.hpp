@@ -21,7 +21,10 @@
 // the max of the leaves). Leaves at coarse depths (pruned space) become whole bricks stored
 // compacted, and OctreeReadOptions::max_voxels bounds how many finest voxels a file may claim,
 // so a 20-byte file with a leaf the size of the world is an error, not an allocation.
-// ColorOcTree and OcTreeStamped .ot files are read too (colours ignored).
+// ColorOcTree and OcTreeStamped .ot files are read too; read_octree_colors() also returns a
+// ColorOcTree's colours: those of its occupied leaves, every finest voxel of a leaf taking the
+// leaf's colour, but not ColorOcTree's "no colour" white, nor the colours of free leaves (knnocc
+// colours occupied voxels only; OctreeColors counts them so a caller can say they were dropped).
 //
 // ColorOcTree .ot (write_color_ot): OctoMap's ColorOcTree::write, a float log-odds then r, g, b
 // bytes per node (ColorOcTreeNode::writeData), for a map plus a colour per voxel. Occupied
@@ -237,6 +240,47 @@ OccupancyMap<Key> read_octree_bytes(const std::string& path, const detail::FileB
 inline OccupancyMap<OcKey> read_octree(const std::string& path,
                                        const OctreeReadOptions& options = {}) {
   return read_octree_shifted<OcKey>(path, options, {0, 0, 0});
+}
+
+/// The colours of a ColorOcTree file (see the file comment), read by read_octree_colors().
+struct OctreeColors {
+  bool color_tree = false;                    ///< the file is a ColorOcTree
+  std::vector<std::pair<OcKey, Rgb>> voxels;  ///< occupied finest voxels that have a colour
+  std::uint64_t free_colored_voxels = 0;      ///< free finest voxels with a colour (not kept)
+};
+
+/// Reads a .bt or .ot file as read_octree() does, and a ColorOcTree's colours into `colors`
+/// (cleared first; an OcTree, OcTreeStamped or .bt file has none).
+inline OccupancyMap<OcKey> read_octree_colors(const std::string& path,
+                                              const OctreeReadOptions& options,
+                                              OctreeColors& colors) {
+  const detail::FileBuffer buf = detail::read_file(path);
+  OccupancyMap<OcKey> map = read_octree_bytes<OcKey>(path, buf, options, {0, 0, 0});
+  colors = OctreeColors{};
+  const detail::OctreeHeader h = detail::parse_octree_header(path, buf.data(), buf.size());
+  colors.color_tree = !h.binary && h.id == "ColorOcTree";
+  if (!colors.color_tree) return map;
+  const OccupancyParams& p = map.params();
+  detail::walk_octree_file(
+      path, buf, h,
+      [&](int d, const detail::NodeCorner& c, float v, bool, const unsigned char* rgb) {
+        const Rgb color{rgb[0], rgb[1], rgb[2]};
+        if (color == Rgb{255, 255, 255}) return;  // ColorOcTree: no colour
+        const bool occupied = map.is_occupied(std::min(std::max(v, p.clamp_min), p.clamp_max));
+        const std::uint32_t span = std::uint32_t{1} << (detail::kOctreeDepth - d);
+        if (!occupied) {
+          colors.free_colored_voxels += std::uint64_t{span} * span * span;
+          return;
+        }
+        for (std::uint32_t x = 0; x < span; ++x)
+          for (std::uint32_t y = 0; y < span; ++y)
+            for (std::uint32_t z = 0; z < span; ++z)
+              colors.voxels.push_back({OcKey(static_cast<OcKey::index_type>(c.k[0] + x),
+                                             static_cast<OcKey::index_type>(c.k[1] + y),
+                                             static_cast<OcKey::index_type>(c.k[2] + z)),
+                                       color});
+      });
+  return map;
 }
 
 /// The bytes of `map` as liboctomap's OcTree::writeBinary would write them (.bt). A `note` adds

@@ -4,9 +4,14 @@
 //
 // Reading supports "format ascii 1.0", "binary_little_endian 1.0" and "binary_big_endian 1.0".
 // The "vertex" element must have scalar properties x, y, z of type float/float32/double/float64
-// (doubles are narrowed to float); an optional integer property "id" fills Cloud::ids; uchar
-// (uint8) properties "red", "green" and "blue", all three, fill Cloud::colors (colours of another
-// type are skipped); the optional integer properties "found", "visible" and "observations" (a SLAM
+// (doubles are narrowed to float); an optional integer property "id" fills Cloud::ids; scalar
+// properties "red", "green" and "blue", all three, fill Cloud::colors, each channel scaled from
+// its type to 0..255 (ply_colour_channel below): uchar as is; ushort (16-bit colour, as PDAL and
+// LAS write it) times 255/65535, rounded; every other integer type (char, short, int, uint) as is
+// on the 0..255 scale; float and double on the 0..1 scale, times 255, rounded. Values beyond the
+// scale clamp to 0 or 255 (negative values, NaN: 0). In ascii files a token that is no value of
+// its declared type (a uchar 256, a fraction for an int) is an error. The optional integer
+// properties "found", "visible" and "observations" (a SLAM
 // system's counters for the map point, core/point_evidence.hpp) fill Cloud::evidence. Any other
 // vertex property of a PLY scalar type is skipped. Other elements (e.g. "face" with list
 // properties) are skipped when they follow "vertex"; in binary files an element with a list
@@ -67,7 +72,7 @@ inline std::int64_t load_integer(const unsigned char* p, PlyType t, bool swap) n
 struct PlyVertexLayout {
   std::size_t index = 0;  // position of "vertex" in the element list
   int x = -1, y = -1, z = -1, id = -1;
-  int rgb[3] = {-1, -1, -1};  // red, green, blue: all three uchar, or all -1
+  int rgb[3] = {-1, -1, -1};  // red, green, blue: all three scalars, or all -1
 
   bool has_color() const { return rgb[0] >= 0; }
   int color_channel(int slot) const {  // 0-2 when `slot` is a colour property, else -1
@@ -79,17 +84,58 @@ struct PlyVertexLayout {
   bool has_evidence() const { return evidence[0] >= 0 || evidence[1] >= 0 || evidence[2] >= 0; }
 };
 
-// The vertex's uchar red, green and blue properties, when it has all three.
+// The vertex's red, green and blue scalar properties, when it has all three.
 inline void locate_colour(const PlyElement& el, PlyVertexLayout& v) {
   const char* const names[3] = {"red", "green", "blue"};
   int slots[3];
   for (int c = 0; c < 3; ++c) {
     slots[c] = el.find(names[c]);
     if (slots[c] < 0) return;
-    const PlyProperty& prop = el.props[static_cast<std::size_t>(slots[c])];
-    if (prop.is_list || prop.type != PlyType::u8) return;
+    if (el.props[static_cast<std::size_t>(slots[c])].is_list) return;
   }
   for (int c = 0; c < 3; ++c) v.rgb[c] = slots[c];
+}
+
+// An integer colour channel on 0..255: ushort on the 16-bit scale, other integer types as is.
+inline std::uint8_t colour_from_integer(std::int64_t v, PlyType t) noexcept {
+  if (t == PlyType::u16) return static_cast<std::uint8_t>((v * 255 + 32767) / 65535);
+  return static_cast<std::uint8_t>(v <= 0 ? 0 : v >= 255 ? 255 : v);
+}
+// A float or double colour channel on 0..1 (NaN and below 0: 0; above 1: 255).
+inline std::uint8_t colour_from_real(double v) noexcept {
+  if (!(v > 0.0)) return 0;
+  if (v >= 1.0) return 255;
+  return static_cast<std::uint8_t>(v * 255.0 + 0.5);
+}
+
+// Whether an ascii integer token fits its declared type.
+inline bool ply_integer_fits(std::int64_t v, PlyType t) noexcept {
+  switch (t) {
+    case PlyType::i8:
+      return v >= -128 && v <= 127;
+    case PlyType::u8:
+      return v >= 0 && v <= 255;
+    case PlyType::i16:
+      return v >= -32768 && v <= 32767;
+    case PlyType::u16:
+      return v >= 0 && v <= 65535;
+    case PlyType::i32:
+      return v >= -2147483648ll && v <= 2147483647ll;
+    case PlyType::u32:
+      return v >= 0 && v <= 4294967295ll;
+    case PlyType::f32:
+    case PlyType::f64:
+      break;
+  }
+  return true;
+}
+
+// One binary colour channel of type t at p, on 0..255.
+inline std::uint8_t load_colour(const unsigned char* p, PlyType t, bool swap) noexcept {
+  if (t == PlyType::u8) return *p;
+  if (t == PlyType::f32) return colour_from_real(load_scalar<float>(p, swap));
+  if (t == PlyType::f64) return colour_from_real(load_scalar<double>(p, swap));
+  return colour_from_integer(load_integer(p, t, swap), t);
 }
 
 // The vertex properties of PointEvidence, in PlyVertexLayout::evidence's order.
@@ -218,12 +264,14 @@ inline Cloud read_ply_binary(const std::string& path, const PlyHeader& h, const 
     }
   }
   if (v.has_color()) {
-    std::size_t at[3];
-    for (int c = 0; c < 3; ++c) at[c] = el.props[static_cast<std::size_t>(v.rgb[c])].offset;
+    const PlyProperty* ch[3];
+    for (int c = 0; c < 3; ++c) ch[c] = &el.props[static_cast<std::size_t>(v.rgb[c])];
     cloud.colors.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
       const unsigned char* r = p + i * rec;
-      cloud.colors[i] = Rgb{r[at[0]], r[at[1]], r[at[2]]};
+      cloud.colors[i] = Rgb{load_colour(r + ch[0]->offset, ch[0]->type, swap),
+                            load_colour(r + ch[1]->offset, ch[1]->type, swap),
+                            load_colour(r + ch[2]->offset, ch[2]->type, swap)};
     }
   }
   if (v.has_evidence()) {
@@ -347,13 +395,22 @@ inline Cloud read_ply_ascii(const std::string& path, const PlyHeader& h, const P
         }
         cloud.ids[i] = static_cast<std::uint64_t>(id);
       } else if (const int c = v.color_channel(slot); c >= 0) {
-        std::uint64_t value = 0;
-        if (!parse_int_token(b, e, value) || value > 255) {
-          throw Error(path, where(el, i) + ": cannot parse " + quote_token(b, e) +
-                                " as a colour (0-255, property " + prop.name + ")");
-        }
         std::uint8_t* rgb[3] = {&cloud.colors[i].r, &cloud.colors[i].g, &cloud.colors[i].b};
-        *rgb[c] = static_cast<std::uint8_t>(value);
+        bool ok = false;
+        if (ply_type_is_real(prop.type)) {
+          double value = 0.0;
+          ok = parse_real_token(b, e, value);
+          *rgb[c] = colour_from_real(value);
+        } else {
+          std::int64_t value = 0;
+          ok = parse_int_token(b, e, value) && ply_integer_fits(value, prop.type);
+          *rgb[c] = colour_from_integer(value, prop.type);
+        }
+        if (!ok) {
+          throw Error(path, where(el, i) + ": cannot parse " + quote_token(b, e) +
+                                " as a colour of type " + ply_type_name(prop.type) + " (property " +
+                                prop.name + ")");
+        }
       } else if (v.has_evidence()) {
         for (int k = 0; k < 3; ++k) {
           if (slot != v.evidence[k]) continue;

@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <type_traits>
 
 #include "../../core/grid.hpp"
 #include "../error.hpp"
@@ -134,7 +135,8 @@ struct NodeCorner {
 };
 
 // Walks a node stream. leaf(depth, corner, value, occupied_code): for .bt the value is unused
-// and occupied_code tells the class; for .ot the value is the stored log-odds.
+// and occupied_code tells the class; for .ot the value is the stored log-odds. A .ot leaf
+// callable with a fifth argument gets the node's extra bytes there (a ColorOcTree's r, g, b).
 class OctreeWalker {
  public:
   OctreeWalker(const std::string& path, const OctreeHeader& h, const unsigned char* data,
@@ -179,6 +181,16 @@ class OctreeWalker {
     }
   }
 
+  // A leaf callable with a fifth argument also gets the node's extra bytes (none in a .bt).
+  template <class Leaf>
+  static void call_leaf(Leaf& leaf, int d, const NodeCorner& c, float v, bool occupied_code,
+                        const unsigned char* extra) {
+    if constexpr (std::is_invocable_v<Leaf&, int, NodeCorner, float, bool, const unsigned char*>)
+      leaf(d, c, v, occupied_code, extra);
+    else
+      leaf(d, c, v, occupied_code);
+  }
+
   template <class Leaf>
   void bt_node(int d, NodeCorner c, Leaf& leaf) {
     if (end_ - p_ < 2) truncated();
@@ -188,7 +200,7 @@ class OctreeWalker {
       const unsigned code = (codes >> (2 * i)) & 3u;
       if (code == 0 || code == 3) continue;
       count_node();
-      leaf(d + 1, c.child(i, d), 0.0f, code == 2);
+      call_leaf(leaf, d + 1, c.child(i, d), 0.0f, code == 2, nullptr);
     }
     for (int i = 0; i < 8; ++i) {
       if (((codes >> (2 * i)) & 3u) != 3u) continue;
@@ -212,7 +224,7 @@ class OctreeWalker {
       throw Error(path_, "node " + std::to_string(nodes_) + " has a non-finite log-odds value");
     }
     if (mask == 0) {
-      leaf(d, c, v, false);
+      call_leaf(leaf, d, c, v, false, p_ - 1 - extra_);
       return;
     }
     if (d == kOctreeDepth) {

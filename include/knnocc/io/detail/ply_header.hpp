@@ -60,6 +60,13 @@ inline std::size_t ply_type_size(PlyType t) noexcept {
   return 0;
 }
 
+// The type's name in error messages (the PLY 1.0 spelling).
+inline const char* ply_type_name(PlyType t) noexcept {
+  static const char* const names[] = {"char", "uchar", "short", "ushort",
+                                      "int",  "uint",  "float", "double"};
+  return names[static_cast<int>(t)];
+}
+
 inline bool ply_type_is_real(PlyType t) noexcept { return t == PlyType::f32 || t == PlyType::f64; }
 inline bool ply_type_is_signed(PlyType t) noexcept {
   return t == PlyType::i8 || t == PlyType::i16 || t == PlyType::i32;

@@ -121,6 +121,7 @@ ConvertJob convert_job(const Args& args) {
   j.out = args.positional()[1];
   j.in_ext = lower_extension(j.in);
   j.out_ext = lower_extension(j.out);
+  if (j.out_ext == ".yaml") (void)io::ros_map_image_entry(j.out);  // a name YAML can hold
   const OutputList outputs =
       j.out_ext == ".yaml" ? OutputList{{"OUT", j.out}, {"OUT", io::ros_map_image_path(j.out)}}
                            : OutputList{{"OUT", j.out}};
@@ -217,8 +218,8 @@ void write_converted_map(const OccupancyMap<OcKey>& map, const ConvertJob& j, co
     MapFileContext ctx;
     ctx.up = up_axis(args);
     ctx.band = parse_range("--grid-z", args.str("--grid-z"));
-    std::printf("%s\nwrote %s, %s\n", write_grid_file(map, out, ctx).c_str(), out.c_str(),
-                io::ros_map_image_path(out).c_str());
+    std::printf("%s\nwrote %s, %s\n", write_grid_file(map, out, ctx).c_str(),
+                io::printable(out).c_str(), io::printable(io::ros_map_image_path(out)).c_str());
   } else if (j.out_ext == ".png") {
     write_map_png(out, map, up_axis(args), std::filesystem::path(j.in).filename().string());
     std::printf("wrote %s: a picture of the map\n", out.c_str());
@@ -276,7 +277,7 @@ io::Cloud read_cloud(const std::string& in) {
 
 int convert_cloud(const ConvertJob& j) {
   const io::Cloud cloud = reading(j.in, [&] { return read_cloud(j.in); });
-  const std::vector<std::uint64_t>* ids = cloud.ids.empty() ? nullptr : &cloud.ids;
+  const std::vector<std::uint64_t>* ids = cloud.has_ids() ? &cloud.ids : nullptr;
   if (!cloud.colors.empty() && j.out_ext != ".ply")
     note_colors_not_kept("convert", j.in, "cloud", {j.out},
                          "a format without colour; .ply keeps them");

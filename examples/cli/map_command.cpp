@@ -274,7 +274,7 @@ KeyframeStats insert_scan(Mapper<Model>& mapper, io::Scan& scan, std::size_t i,
       throw budget.too_big(i,
                            "the points alone need more than " + std::to_string(enough) + " bricks");
     if constexpr (std::is_same_v<Model, RobustModel>)
-      if (w.ids.empty()) run.note_missing_ids();
+      if (!scan.cloud.has_ids() && !w.d.empty()) run.note_missing_ids();  // an empty one: no-op
     run.add_colors(origin, w.d, scan.cloud.colors);
     try {
       return mapper.insert_keyframe(scan.pose.t, w.d, w.ids, w.evidence);

@@ -184,7 +184,7 @@ tiles::RatingTotals rate_run(const MapOptions& opt, Mapper<Model, Key>& rater,
     run.prepare(scan, rater.map().grid(), source_path_for_errors(opt.input, i));
     if (!scan.cloud.colors.empty()) coloured = true;
     if constexpr (std::is_same_v<Model, RobustModel>)
-      if (scan.cloud.ids.empty()) run.note_missing_ids();
+      if (!scan.cloud.has_ids() && !scan.cloud.points.empty()) run.note_missing_ids();
   };
   auto rated_one = [&](std::size_t i, const KeyframeStats& ks, double ms) {
     totals.rays += ks.rays;
@@ -330,7 +330,7 @@ int run_map_wide(const MapOptions& opt, const Model& model) {
       run.prepare(scan, mapper.map().grid(), source_path_for_errors(opt.input, i));
       coloured = coloured || !scan.cloud.colors.empty();
       if constexpr (std::is_same_v<Model, RobustModel>)
-        if (scan.cloud.ids.empty()) run.note_missing_ids();
+        if (!scan.cloud.has_ids() && !scan.cloud.points.empty()) run.note_missing_ids();
       w.load<Mapper<Model, WideKey>>(scan);
       const auto a = std::chrono::steady_clock::now();
       totals.add(w.insert(mapper));

@@ -252,6 +252,7 @@ inline Cloud read_ply_binary(const std::string& path, const PlyHeader& h, const 
                                 load_coord(r + pz.offset, pz.type, swap)};
     }
   }
+  cloud.ids_declared = v.id >= 0;
   if (v.id >= 0) {
     const PlyProperty& pid = el.props[static_cast<std::size_t>(v.id)];
     cloud.ids.resize(n);
@@ -357,6 +358,7 @@ inline Cloud read_ply_ascii(const std::string& path, const PlyHeader& h, const P
   const std::size_t n = static_cast<std::size_t>(el.count);
   Cloud cloud;
   cloud.points.resize(n);
+  cloud.ids_declared = v.id >= 0;
   if (v.id >= 0) cloud.ids.resize(n);
   if (v.has_color()) cloud.colors.resize(n);
   if (v.has_evidence()) cloud.evidence.resize(n);
@@ -552,7 +554,7 @@ inline void write_ply(const std::string& path, const std::vector<Point3f>& pts,
 
 /// Writes a cloud with every column it has (ids, colours, SLAM counters); see above.
 inline void write_ply_cloud(const std::string& path, const Cloud& cloud, bool binary = true) {
-  write_ply(path, cloud.points, cloud.ids.empty() ? nullptr : &cloud.ids, binary,
+  write_ply(path, cloud.points, cloud.has_ids() ? &cloud.ids : nullptr, binary,
             cloud.colors.empty() ? nullptr : &cloud.colors,
             cloud.evidence.empty() ? nullptr : &cloud.evidence);
 }

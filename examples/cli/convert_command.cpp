@@ -315,7 +315,7 @@ int convert_tile_set(const ConvertJob& j, const Args& args) {
   const OccupancyMap<OcKey> map = read_tile_set_map(j.in, free_too, "convert");
   const auto c = map.count_voxels();
   std::printf("map %zu voxels (occupied %zu, free %zu)\n", c.known(), c.occupied, c.free);
-  write_converted_map(map, j, args);
+  within_memory(j.out, "writing it", [&] { write_converted_map(map, j, args); });
   return 0;
 }
 
@@ -334,9 +334,11 @@ int run_convert(const Args& args) {
   VoxelColors<OcKey> voxel_colors(map.grid().resolution());
   reading(j.in, [&] { add_tree_colors(voxel_colors, tree); });
   note_free_colors("convert", j.in, tree);
-  write_converted_map(
-      map, j, args,
-      MapInputColors{tree.color_tree, voxel_colors.empty() ? nullptr : &voxel_colors});
+  within_memory(j.out, "writing it", [&] {
+    write_converted_map(
+        map, j, args,
+        MapInputColors{tree.color_tree, voxel_colors.empty() ? nullptr : &voxel_colors});
+  });
   return 0;
 }
 

@@ -438,6 +438,13 @@ PY
     "$K" map --input wide.xyz --res 0.1 --out-bt wide.bt > /dev/null || fail "map"
     expect 2 "^knnocc convert: wide.yaml: out of memory \(--memory-limit 200 MB\)" \
       "$K" convert wide.bt wide.yaml --grid-z 0:1 --up z --memory-limit 200M
+    # A map that fits whose cloud of free voxels does not: the line names the output.
+    awk 'BEGIN { for (i = 0; i < 200; i++) for (j = 0; j < 200; j++)
+                   printf "%.1f %.1f 8\n", (i - 100) * 0.1, (j - 100) * 0.1 }' > sheet.xyz
+    "$K" map --input sheet.xyz --res 0.05 --out-bt sheet.bt > /dev/null || fail "map sheet"
+    expect 2 "^knnocc convert: sheet.ply: out of memory \(--memory-limit 200 MB\) writing it" \
+      "$K" convert sheet.bt sheet.ply --ply-free --memory-limit 200M
+    [ ! -e sheet.ply ] || fail "sheet.ply written"
     no_temporaries ;;
   read_only_output)  # a read-only output is kept, as cp keeps it: exit 2, nothing written
     "$K" map --input p.xyz --res 0.1 --out-bt m.bt > /dev/null || fail "map"

@@ -17,7 +17,7 @@ if(TARGET knnocc_tool AND KNNOCC_BASH)
     unmappable_values save_every_resumes stale_temporaries_removed
     corrections_outputs_all_or_none dangling_link_keeps_user_files heldout_repeated_id
     grid_yaml_names empty_keyframe_with_ids heldout_nothing_to_score errors_name_the_file
-    read_only_output sigpipe_removes_temporaries)
+    read_only_output sigpipe_removes_temporaries stale_staging_folder_removed)
   foreach(_case IN LISTS KNNOCC_RESOURCE_CASES)
     add_test(NAME cli.resources.${_case}
       COMMAND "${KNNOCC_BASH}" "${CMAKE_CURRENT_LIST_DIR}/cli_resources.sh"

@@ -472,6 +472,28 @@ PY
     [ $rc = 141 ] || fail "exit $rc after SIGPIPE, expected 141 (killed by the signal)"
     [ ! -e big ] || fail "big/ exists after SIGPIPE"
     no_temporaries ;;
+  stale_staging_folder_removed)  # a SIGKILLed run's staging folder goes at the next start; a live one stays
+    "$K" sim --out big --keyframes 100000 > /dev/null 2>&1 &
+    pid=$!
+    for i in $(seq 50); do ls -a | grep -q 'big\.tmp-' && break; sleep 0.1; done
+    killed=$(ls -a | grep 'big\.tmp-') || fail "no staging folder seen"
+    kill -KILL $pid; wait $pid
+    [ -d "$killed" ] || fail "SIGKILL left no staging folder to clean"
+    mkdir big.tmp-Zz99Yy && touch -d '1 minute ago' big.tmp-Zz99Yy  # a user's folder (0755): kept
+    "$K" sim --out big --keyframes 100000 > /dev/null 2>&1 &
+    pid=$!
+    for i in $(seq 50); do [ "$(ls -a | grep -c 'big\.tmp-')" = 3 ] && break; sleep 0.1; done
+    live=$(ls -a | grep 'big\.tmp-' | grep -v -e "^$killed\$" -e Zz99Yy) || fail "no live staging folder"
+    sleep 2.2  # older than a second (in whole seconds), but locked
+    expect 0 "" "$K" sim --out big --keyframes 3
+    [ -f big/poses.txt ] || fail "big/ not written"
+    [ "$(stat -c %a big)" = "$(printf '%o' $(( 0777 & ~0$(umask) )))" ] || fail "big/ has mode $(stat -c %a big), not mkdir's"
+    [ ! -e "$killed" ] || fail "the killed run's staging folder is still there"
+    [ -d "$live" ] || fail "a running writer's staging folder was removed"
+    [ -d big.tmp-Zz99Yy ] || fail "a user's folder was removed"
+    kill -TERM $pid; wait $pid
+    rmdir big.tmp-Zz99Yy
+    no_temporaries ;;
   *) fail "unknown case $CASE" ;;
 esac
 echo PASS

@@ -34,27 +34,30 @@ inline std::string temporary_template(const std::string& target) {
 }
 
 #if KNNOCC_POSIX_FILES
-/// The permission bits a newly created file would get (0666 minus the umask), read without
-/// changing the process's umask where /proc says it.
-inline mode_t new_file_mode() {
-  static const mode_t mode = [] {
+/// The process's umask, read without changing it where /proc says it.
+inline mode_t process_umask() {
+  static const mode_t mask = [] {
     if (std::FILE* f = std::fopen("/proc/self/status", "r")) {
       char line[256];
       unsigned m = 0;
       while (std::fgets(line, sizeof line, f)) {
         if (std::sscanf(line, "Umask: %o", &m) == 1) {
           std::fclose(f);
-          return static_cast<mode_t>(0666 & ~m);
+          return static_cast<mode_t>(m);
         }
       }
       std::fclose(f);
     }
     const mode_t m = ::umask(022);
     ::umask(m);
-    return static_cast<mode_t>(0666 & ~m);
+    return m;
   }();
-  return mode;
+  return mask;
 }
+/// The permission bits a newly created file would get (0666 minus the umask).
+inline mode_t new_file_mode() { return static_cast<mode_t>(0666 & ~process_umask()); }
+/// The permission bits mkdir would give a new folder (0777 minus the umask).
+inline mode_t new_folder_mode() { return static_cast<mode_t>(0777 & ~process_umask()); }
 #endif
 
 // A temporary is locked (flock) from its creation until it is renamed or removed, so that
@@ -261,9 +264,10 @@ class AtomicFile {
 };
 
 /// Removes the temporaries that writers of `target` killed without a chance to clean up (SIGKILL,
-/// a power cut) left beside it: AtomicFile's "<name>.tmp-XXXXXX" files that no running process
-/// holds locked and that are older than a second. Returns how many it removed. For programs:
-/// knnocc calls it for each output before writing.
+/// a power cut) left beside it: AtomicFile's "<name>.tmp-XXXXXX" files and StagingDir's
+/// "<name>.tmp-XXXXXX" folders (mode 0700, as mkdtemp makes them, and this user's) that no
+/// running process holds locked and that are older than a second. Returns how many it removed.
+/// For programs: knnocc calls it for each output before writing.
 inline std::size_t remove_stale_temporaries(const std::string& target) {
   std::size_t removed = 0;
 #if KNNOCC_POSIX_FILES
@@ -286,9 +290,14 @@ inline std::size_t remove_stale_temporaries(const std::string& target) {
     const int fd = ::open(it->path().c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
     if (fd < 0) continue;
     struct stat st;
-    if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) &&
-        st.st_mtime + 1 < now && ::unlink(it->path().c_str()) == 0)
-      ++removed;
+    if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &st) == 0 && st.st_mtime + 1 < now) {
+      if (S_ISREG(st.st_mode) && ::unlink(it->path().c_str()) == 0) {
+        ++removed;
+      } else if (S_ISDIR(st.st_mode) && (st.st_mode & 07777) == 0700 && st.st_uid == ::geteuid()) {
+        std::error_code rm;
+        if (fs::remove_all(it->path(), rm) > 0 && !rm) ++removed;
+      }
+    }
     ::close(fd);
   }
 #else
@@ -324,9 +333,10 @@ class CommitGroup : public detail::CommitGroupBase {
 /// (path()), and commit() renames it to `dir`. `dir` must not exist or be an empty folder
 /// (replaced), or a folder the `replaceable` predicate accepts (moved aside, and removed once the
 /// new folder is in place); any other non-empty folder is refused in the constructor, before any
-/// work. Without commit()
-/// the staging folder and its contents are removed (also on SIGINT/SIGTERM with
-/// remove_temporaries_on_signal).
+/// work. Without commit() the staging folder and its contents are removed (also on
+/// SIGINT/SIGTERM with remove_temporaries_on_signal). The staging folder is locked (flock) while
+/// it lives, so that a later StagingDir of the same target removes it if its writer was killed
+/// (SIGKILL, a power cut): see remove_stale_temporaries().
 class StagingDir {
  public:
   /// Says whether an existing non-empty folder may be replaced as a whole (e.g. the output of an
@@ -343,12 +353,18 @@ class StagingDir {
     const fs::path parent = target.parent_path();
     std::string tmpl = (parent.empty() ? std::string() : parent.string() + "/") +
                        target.filename().string() + ".tmp-XXXXXX";
+    remove_stale_temporaries(target.string());
     tmp_ = std::make_unique<std::string>(tmpl);
 #if KNNOCC_POSIX_FILES
     if (!::mkdtemp(tmp_->data())) {
       const int err = errno;
       throw Error(dir, "cannot create a folder beside it: " + detail::errno_text(err), err);
     }
+    const int fd = ::open(tmp_->c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd >= 0 && ::flock(fd, LOCK_EX | LOCK_NB) == 0)
+      lock_ = fd;
+    else if (fd >= 0)
+      ::close(fd);
 #else
     std::error_code ec;
     tmp_->replace(tmp_->size() - 6, 6, "000000");
@@ -359,10 +375,12 @@ class StagingDir {
   StagingDir(const StagingDir&) = delete;
   StagingDir& operator=(const StagingDir&) = delete;
   ~StagingDir() {
-    if (!tmp_) return;
-    std::error_code ec;
-    std::filesystem::remove_all(*tmp_, ec);
-    detail::unregister_temporary(slot_);
+    if (tmp_) {
+      std::error_code ec;
+      std::filesystem::remove_all(*tmp_, ec);
+      detail::unregister_temporary(slot_);
+    }
+    detail::release_lock(lock_);
   }
 
   /// Where to write the folder's contents until commit().
@@ -383,6 +401,10 @@ class StagingDir {
         }
       }
     }
+#if KNNOCC_POSIX_FILES
+    // mkdtemp made it 0700; the output gets what mkdir would give it.
+    (void)::chmod(tmp_->c_str(), detail::new_folder_mode());
+#endif
     if (std::rename(tmp_->c_str(), dir_.c_str()) != 0) {
       const int err = errno;
       if (!old.empty()) std::rename(old.c_str(), dir_.c_str());  // the earlier folder back
@@ -394,6 +416,7 @@ class StagingDir {
       std::filesystem::remove_all(old, ec);
     }
     detail::unregister_temporary(std::exchange(slot_, -1));
+    detail::release_lock(lock_);
     tmp_.reset();
   }
 
@@ -414,6 +437,7 @@ class StagingDir {
   Replaceable replaceable_ = nullptr;
   std::unique_ptr<std::string> tmp_;
   int slot_ = -1;
+  int lock_ = -1;  // a descriptor of the staging folder holding its flock, or -1
 };
 
 }  // namespace knnocc::io

@@ -151,7 +151,8 @@ def test_setstate_refuses_each_damage_and_names_it(knnocc):
         "state version": [(), state[:11], (3,) + state[1:], (True,) + state[1:],
                           (1,) + state[1:], ("2",) + state[1:]],
         "resolution must be a number": [(2, "0.1") + state[2:]],
-        "resolution must be finite": [inf_res],
+        "resolution must be finite": [inf_res, (2, 10**400) + state[2:]],
+        "prob_hit must be finite": [(2, 0.1, 10**400) + state[3:]],
         "resolution": [(2, -0.1) + state[2:], (2, 0.0) + state[2:]],
         "hit probability": [(2, 0.1, 0.4) + state[3:]],
         "miss probability": [(2, 0.1, 0.8, 0.6) + state[4:]],
@@ -167,6 +168,7 @@ def test_setstate_refuses_each_damage_and_names_it(knnocc):
                                  with_voxels(state, keys, values, count=n + 1),
                                  with_voxels(state, keys[:-1], values)],
         "CRC-32": [with_voxels(state, keys, values, crc=state[11] ^ 1),
+                   with_voxels(state, keys, values, crc=str(state[11])),
                    with_voxels(state, keys[:6] + bytes([keys[6] ^ 1]) + keys[7:], values,
                                crc=state[11])],
         "not finite": [with_voxels(state, keys, nan_at_3)],
@@ -176,6 +178,12 @@ def test_setstate_refuses_each_damage_and_names_it(knnocc):
         for s in states:
             with pytest.raises(ValueError, match=expected):
                 load(knnocc, s)
+    # A count whose byte sizes wrap round 2^64 to the bytes given (2^63 + k voxels of 4 and 6
+    # bytes: 4k and 6k modulo 2^64) is not k voxels.
+    for k in (0, 1, n):
+        for count in (2**63 + k, 2**62 + k):
+            with pytest.raises(ValueError, match="cut short or damaged"):
+                load(knnocc, with_voxels(state, keys[: 6 * k], values[: 4 * k], count=count))
     # A consistent state cut to half its voxels is a smaller map, not half of this one.
     half = load(knnocc, with_voxels(state, keys[: 6 * (n // 2)], values[: 4 * (n // 2)]))
     assert len(half) == n // 2
@@ -186,8 +194,9 @@ def test_setstate_refuses_each_damage_and_names_it(knnocc):
         load(knnocc, (1,) + state[1:8] + (keys, nan_at_3))
 
 
-MUTANTS = [None, -5, 0, 1, 2, 2**64, 2**70, -(2**70), math.nan, math.inf, -math.inf, 1e300,
-           0.5, 1.5, True, "x", b"", b"\x00" * 6, (), [], {}, object()]
+MUTANTS = [None, -5, 0, 1, 2, 2**62, 2**63, 2**63 + 1, 2**64 - 1, 2**64, 2**70, -(2**70), 10**400,
+           math.nan, math.inf, -math.inf, 1e300, 0.5, 1.5, True, "x", b"", b"\x00" * 6, (), [], {},
+           object()]
 
 
 def mutate(state, rng):
@@ -357,3 +366,16 @@ def test_membership_and_inputs(knnocc):
         assert len(obj.map if obj is not m else m) == 0
     m.insert_point_cloud(np.ones((1000, 3)), (0, 0, 0))  # read in place: no copy to refuse
     assert len(m) > 0
+
+
+def test_an_empty_cloud_that_declares_ids_has_ids(knnocc, tmp_path):
+    """Ids belong to the format: a PLY of zero points with an id property gives an empty id
+    array, one without gives None."""
+    header = "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n" \
+             "property float z\n"
+    (tmp_path / "ids.ply").write_text(header + "property uint id\nend_header\n")
+    (tmp_path / "plain.ply").write_text(header + "end_header\n")
+    points, ids = knnocc.read_points(tmp_path / "ids.ply")
+    assert points.shape == (0, 3) and ids is not None and ids.shape == (0,)
+    assert ids.dtype == np.uint64
+    assert knnocc.read_points(tmp_path / "plain.ply")[1] is None

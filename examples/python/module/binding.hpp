@@ -67,6 +67,12 @@ std::uint64_t id_in(py::handle obj, const char* name);
 /// A memory limit in bytes (0: no limit): TypeError for a non-integer, ValueError for a negative
 /// one or one of 2**64 or more.
 std::size_t memory_limit_in(py::handle obj);
+/// The memory limit of `owner`, read under its guard (the input is converted before the call takes
+/// the object, so readers are not refused during a copy).
+inline std::size_t limit_of(MapOwner& owner, const char* what) {
+  const auto lock = owner.guard.read(what);
+  return owner.memory_limit();
+}
 /// A str, bytes or os.PathLike path.
 std::string path_in(py::handle obj);
 /// A pose as a 4x4 float64 array.

@@ -19,7 +19,8 @@ namespace {
 py::tuple cloud_out(io::Cloud&& cloud) {
   const auto n = static_cast<py::ssize_t>(cloud.points.size());
   py::object ids = py::none();
-  if (!cloud.ids.empty()) ids = adopt<std::uint64_t>(std::move(cloud.ids), {n});
+  // Ids belong to the format: a cloud of zero points that declares them has an empty id array.
+  if (cloud.has_ids()) ids = adopt<std::uint64_t>(std::move(cloud.ids), {n});
   return py::make_tuple(adopt<float>(std::move(cloud.points), {n, 3}), ids);
 }
 

@@ -230,7 +230,11 @@ double state_number(const py::tuple& t, std::size_t i, const char* name) {
       py::isinstance<py::bool_>(v))
     bad_state(std::string(name) + " must be a number, got " +
               py::str(py::type::of(v).attr("__name__")).cast<std::string>());
-  const double x = v.cast<double>();
+  const double x = PyFloat_AsDouble(v.ptr());  // an integer beyond double's range: OverflowError
+  if (PyErr_Occurred()) {
+    PyErr_Clear();
+    bad_state(std::string(name) + " must be finite");
+  }
   if (!std::isfinite(x)) bad_state(std::string(name) + " must be finite");
   return x;
 }
@@ -274,13 +278,17 @@ MapRef set_state(const py::object& state) {
   const auto keys = t[keys_at].cast<std::string_view>();
   const auto values = t[keys_at + 1].cast<std::string_view>();
   const std::size_t n = v1 ? values.size() / sizeof(float) : state_count(t, 8, "the voxel count");
-  if (values.size() != n * sizeof(float) || keys.size() != n * 3 * sizeof(std::uint16_t))
+  // Compared by division: a count near 2^64 must not wrap round to the bytes' size.
+  if (values.size() % sizeof(float) != 0 || values.size() / sizeof(float) != n ||
+      keys.size() % (3 * sizeof(std::uint16_t)) != 0 ||
+      keys.size() / (3 * sizeof(std::uint16_t)) != n)
     bad_state(std::to_string(keys.size()) + " bytes of keys and " + std::to_string(values.size()) +
               " of log-odds for " + std::to_string(n) +
               " voxels (6 and 4 each): the state is cut short or damaged");
   if (!v1) {
     const py::object crc32 = py::module_::import("zlib").attr("crc32");
-    if (!crc32(t[keys_at + 1], crc32(t[keys_at])).equal(t[11]))
+    if (!py::isinstance<py::int_>(t[11]) || py::isinstance<py::bool_>(t[11]) ||
+        !crc32(t[keys_at + 1], crc32(t[keys_at])).equal(t[11]))
       bad_state("the voxels do not match their CRC-32: the state is damaged");
   }
   try {
@@ -376,9 +384,9 @@ void bind_map(py::module_& m) {
         MapObject& object = self.writable("OccupancyMap.insert_point_cloud");
         if (threads < 1 || threads > 1024)
           throw py::value_error("threads must be in [1, 1024], got " + std::to_string(threads));
-        const auto lock = object.guard.write("OccupancyMap.insert_point_cloud");
-        const PointsIn in(points, "points", object.memory_limit());
+        const PointsIn in(points, "points", limit_of(object, "OccupancyMap.insert_point_cloud"));
         const Point3d o = vec3_in(origin, "origin");
+        const auto lock = object.guard.write("OccupancyMap.insert_point_cloud");
         const py::gil_scoped_release nogil;
         object.insert_point_cloud(o, in.view(), max_range, static_cast<unsigned>(threads),
                                   discretize);

@@ -349,11 +349,11 @@ map.bt` joins it into one file where it fits OctoMap's key range, and `knnocc vi
       "insert_keyframe",
       [](const MapperRef& self, const py::object& origin, const py::object& points,
          const py::object& ids, const py::object& evidence) {
-        const auto lock = self.owner->guard.write("Mapper.insert_keyframe");
         const Point3d o = vec3_in(origin, "origin");
-        const PointsIn in(points, "points", self.owner->memory_limit());
+        const PointsIn in(points, "points", limit_of(*self.owner, "Mapper.insert_keyframe"));
         const std::vector<std::uint64_t> id = ids_in(ids, in.size(), "ids");
         const std::vector<PointEvidence> ev = evidence_in(evidence, in.size(), "evidence");
+        const auto lock = self.owner->guard.write("Mapper.insert_keyframe");
         const py::gil_scoped_release nogil;
         self.owner->insert_keyframe(o, in.view(), id, ev);
       },
@@ -382,11 +382,11 @@ them. MemoryError past memory_limit.)");
       "add",
       [](const LiveRef& self, const py::object& keyframe_id, const py::object& pose,
          const py::object& points, const py::object& ids) {
-        const auto lock = self.owner->guard.write("LiveMapper.add");
         const std::uint64_t id = id_in(keyframe_id, "keyframe_id");
         const Pose p = pose_in(pose, "pose");
-        const PointsIn in(points, "points", self.owner->memory_limit());
+        const PointsIn in(points, "points", limit_of(*self.owner, "LiveMapper.add"));
         std::vector<std::uint64_t> map_ids = ids_in(ids, in.size(), "ids");
+        const auto lock = self.owner->guard.write("LiveMapper.add");
         const py::gil_scoped_release nogil;
         std::vector<Point3f> sensor(in.size());
         in.view().visit([&](const auto& span) {

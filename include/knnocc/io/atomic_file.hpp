@@ -3,6 +3,8 @@
 // AtomicFile: how every knnocc output is written (failures throw io::Error naming the target).
 // CommitGroup: several outputs committed as a set; StagingDir: a folder output built aside.
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -78,6 +80,10 @@ inline void release_lock(int& lock) noexcept {
 #endif
   lock = -1;
 }
+
+/// The file in a StagingDir's folder, from its creation to its commit, that tells
+/// remove_stale_temporaries() the folder is a staging folder and not a user's.
+inline constexpr const char* kStagingMarker = ".knnocc-staging";
 
 class CommitGroupBase;
 inline CommitGroupBase*& current_group() {
@@ -265,7 +271,7 @@ class AtomicFile {
 
 /// Removes the temporaries that writers of `target` killed without a chance to clean up (SIGKILL,
 /// a power cut) left beside it: AtomicFile's "<name>.tmp-XXXXXX" files and StagingDir's
-/// "<name>.tmp-XXXXXX" folders (mode 0700, as mkdtemp makes them, and this user's) that no
+/// "<name>.tmp-XXXXXX" folders (mode 0700, this user's, holding StagingDir's marker file) that no
 /// running process holds locked and that are older than a second. Returns how many it removed.
 /// For programs: knnocc calls it for each output before writing.
 inline std::size_t remove_stale_temporaries(const std::string& target) {
@@ -284,18 +290,34 @@ inline std::size_t remove_stale_temporaries(const std::string& target) {
       tmpl.filename().string().substr(0, tmpl.filename().string().size() - 6);
   const fs::path dir = tmpl.has_parent_path() ? tmpl.parent_path() : fs::path(".");
   const auto now = std::time(nullptr);
+  const auto ours = [&](const std::string& name) {  // prefix + six of mkstemp's characters
+    if (name.size() != prefix.size() + 6 || name.compare(0, prefix.size(), prefix) != 0)
+      return false;
+    return std::all_of(name.end() - 6, name.end(),
+                       [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0; });
+  };
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string name = it->path().filename().string();
-    if (name.size() != prefix.size() + 6 || name.compare(0, prefix.size(), prefix) != 0) continue;
-    const int fd = ::open(it->path().c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+    const fs::path path = it->path();
+    if (!ours(path.filename().string())) continue;
+    std::error_code type_ec;
+    const fs::file_type type = it->symlink_status(type_ec).type();
+    // Only files and folders: opening a FIFO of that name would wait for a writer.
+    if (type_ec || (type != fs::file_type::regular && type != fs::file_type::directory)) continue;
+    const bool folder = type == fs::file_type::directory;
+    // A folder is StagingDir's only while it holds the marker (not the user's own folder).
+    if (folder &&
+        fs::symlink_status(path / detail::kStagingMarker, type_ec).type() != fs::file_type::regular)
+      continue;
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) continue;
     struct stat st;
     if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &st) == 0 && st.st_mtime + 1 < now) {
-      if (S_ISREG(st.st_mode) && ::unlink(it->path().c_str()) == 0) {
+      if (!folder && S_ISREG(st.st_mode) && ::unlink(path.c_str()) == 0) {
         ++removed;
-      } else if (S_ISDIR(st.st_mode) && (st.st_mode & 07777) == 0700 && st.st_uid == ::geteuid()) {
+      } else if (folder && S_ISDIR(st.st_mode) && (st.st_mode & 07777) == 0700 &&
+                 st.st_uid == ::geteuid()) {
         std::error_code rm;
-        if (fs::remove_all(it->path(), rm) > 0 && !rm) ++removed;
+        if (fs::remove_all(path, rm) > 0 && !rm) ++removed;
       }
     }
     ::close(fd);
@@ -351,10 +373,8 @@ class StagingDir {
     fs::path target(dir);
     if (!target.has_filename()) target = target.parent_path();  // "out/" -> "out"
     const fs::path parent = target.parent_path();
-    std::string tmpl = (parent.empty() ? std::string() : parent.string() + "/") +
-                       target.filename().string() + ".tmp-XXXXXX";
     remove_stale_temporaries(target.string());
-    tmp_ = std::make_unique<std::string>(tmpl);
+    tmp_ = std::make_unique<std::string>(detail::temporary_template(target.string()));
 #if KNNOCC_POSIX_FILES
     if (!::mkdtemp(tmp_->data())) {
       const int err = errno;
@@ -365,6 +385,8 @@ class StagingDir {
       lock_ = fd;
     else if (fd >= 0)
       ::close(fd);
+    const int marker = ::open(marker_path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (marker >= 0) ::close(marker);
 #else
     std::error_code ec;
     tmp_->replace(tmp_->size() - 6, 6, "000000");
@@ -402,7 +424,9 @@ class StagingDir {
       }
     }
 #if KNNOCC_POSIX_FILES
-    // mkdtemp made it 0700; the output gets what mkdir would give it.
+    // The output holds only what was written into it, with the mode mkdir would give it (mkdtemp
+    // made it 0700).
+    std::remove(marker_path().c_str());
     (void)::chmod(tmp_->c_str(), detail::new_folder_mode());
 #endif
     if (std::rename(tmp_->c_str(), dir_.c_str()) != 0) {
@@ -438,6 +462,8 @@ class StagingDir {
   std::unique_ptr<std::string> tmp_;
   int slot_ = -1;
   int lock_ = -1;  // a descriptor of the staging folder holding its flock, or -1
+
+  std::string marker_path() const { return *tmp_ + "/" + detail::kStagingMarker; }
 };
 
 }  // namespace knnocc::io

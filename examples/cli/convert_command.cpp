@@ -207,13 +207,14 @@ void write_converted_map(const OccupancyMap<OcKey>& map, const ConvertJob& j, co
   };
   if (colors.voxels && j.out_ext != ".ot" && j.out_ext != ".ply")
     note_colors_not_kept("convert", j.in, "map", {out},
-                         "a format without colour; .ot and .ply keep them");
+                         "knnocc writes it without colour; .ot and .ply keep them");
   if (j.out_ext == ".ot" && colors.color_tree) {
     io::write_color_ot(out, map, color_of);
-    std::printf("wrote %s: the whole map as an OctoMap tree (a ColorOcTree)\n", out.c_str());
+    std::printf("wrote %s: the whole map as an OctoMap tree (a ColorOcTree)\n",
+                io::printable(out).c_str());
   } else if (j.out_ext == ".bt" || j.out_ext == ".ot") {
     j.out_ext == ".bt" ? io::write_bt(out, map) : io::write_ot(out, map);
-    std::printf("wrote %s: the whole map as an OctoMap tree\n", out.c_str());
+    std::printf("wrote %s: the whole map as an OctoMap tree\n", io::printable(out).c_str());
   } else if (j.out_ext == ".yaml") {
     MapFileContext ctx;
     ctx.up = up_axis(args);
@@ -222,17 +223,18 @@ void write_converted_map(const OccupancyMap<OcKey>& map, const ConvertJob& j, co
                 io::printable(out).c_str(), io::printable(io::ros_map_image_path(out)).c_str());
   } else if (j.out_ext == ".png") {
     write_map_png(out, map, up_axis(args), std::filesystem::path(j.in).filename().string());
-    std::printf("wrote %s: a picture of the map\n", out.c_str());
+    std::printf("wrote %s: a picture of the map\n", io::printable(out).c_str());
   } else if (j.out_ext == ".voxels" || j.out_ext == ".txt") {
     io::write_voxel_list(out, io::voxel_records(map, all));
-    std::printf("wrote %s: %zu %s voxels\n", out.c_str(), selected(c, all), selection_name(all));
+    std::printf("wrote %s: %zu %s voxels\n", io::printable(out).c_str(), selected(c, all),
+                selection_name(all));
   } else if (j.out_ext == ".ply") {
     io::VoxelExportOptions o;
     o.which = occ;
     o.shape = args.flag("--ply-cubes") ? io::VoxelShape::cubes : io::VoxelShape::points;
     o.binary = j.encoding != "ascii";
     io::write_voxels_ply(out, map, o, colors.voxels ? color_of : VoxelColorOf<OcKey>());
-    std::printf("wrote %s: %zu %s voxels as %s\n", out.c_str(), selected(c, occ),
+    std::printf("wrote %s: %zu %s voxels as %s\n", io::printable(out).c_str(), selected(c, occ),
                 selection_name(occ), args.flag("--ply-cubes") ? "cubes" : "points");
   } else {
     const std::vector<Point3f> pts = voxel_centres(map, occ);
@@ -242,8 +244,8 @@ void write_converted_map(const OccupancyMap<OcKey>& map, const ConvertJob& j, co
       io::write_kitti_bin(out, pts);
     else
       io::write_xyz(out, pts);
-    std::printf("wrote %s: %zu %s voxel centres as points\n", out.c_str(), selected(c, occ),
-                selection_name(occ));
+    std::printf("wrote %s: %zu %s voxel centres as points\n", io::printable(out).c_str(),
+                selected(c, occ), selection_name(occ));
   }
 }
 
@@ -271,7 +273,7 @@ io::Cloud read_cloud(const std::string& in) {
     std::fprintf(stderr,
                  "knnocc convert: %s: note: %zu of its %zu scans have colours, the others none; "
                  "the merged cloud keeps no colours\n",
-                 in.c_str(), colored, source.size());
+                 io::printable(in).c_str(), colored, source.size());
   return cloud;
 }
 
@@ -280,7 +282,7 @@ int convert_cloud(const ConvertJob& j) {
   const std::vector<std::uint64_t>* ids = cloud.has_ids() ? &cloud.ids : nullptr;
   if (!cloud.colors.empty() && j.out_ext != ".ply")
     note_colors_not_kept("convert", j.in, "cloud", {j.out},
-                         "a format without colour; .ply keeps them");
+                         "knnocc writes it without colour; .ply keeps them");
   if (j.out_ext == ".ply")
     io::write_ply(j.out, cloud.points, ids, j.encoding != "ascii",
                   cloud.colors.empty() ? nullptr : &cloud.colors);
@@ -290,8 +292,8 @@ int convert_cloud(const ConvertJob& j) {
     io::write_kitti_bin(j.out, cloud.points);
   else
     io::write_xyz(j.out, cloud.points);
-  std::printf("cloud %zu points\nwrote %s: %zu points\n", cloud.points.size(), j.out.c_str(),
-              cloud.points.size());
+  std::printf("cloud %zu points\nwrote %s: %zu points\n", cloud.points.size(),
+              io::printable(j.out).c_str(), cloud.points.size());
   return 0;
 }
 
@@ -306,7 +308,7 @@ int convert_tile_set(const ConvertJob& j, const Args& args) {
                                    map_memory_share(memory_limit_bytes()));
     });
     std::printf("tile set %zu tiles\nwrote %s: the whole map as an OctoMap tree (%llu nodes)\n",
-                st.tiles, j.out.c_str(), static_cast<unsigned long long>(st.nodes));
+                st.tiles, io::printable(j.out).c_str(), static_cast<unsigned long long>(st.nodes));
     return 0;
   }
   const bool free_too = j.out_ext == ".yaml" || args.flag("--ply-free") || j.which == "free" ||
@@ -334,10 +336,11 @@ int run_convert(const Args& args) {
   VoxelColors<OcKey> voxel_colors(map.grid().resolution());
   reading(j.in, [&] { add_tree_colors(voxel_colors, tree); });
   note_free_colors("convert", j.in, tree);
+  const bool color_tree = tree.color_tree;
+  tree = io::OctreeColors{};  // the colours are in voxel_colors now: freed before the write
   within_memory(j.out, "writing it", [&] {
-    write_converted_map(
-        map, j, args,
-        MapInputColors{tree.color_tree, voxel_colors.empty() ? nullptr : &voxel_colors});
+    write_converted_map(map, j, args,
+                        MapInputColors{color_tree, voxel_colors.empty() ? nullptr : &voxel_colors});
   });
   return 0;
 }

@@ -33,9 +33,9 @@ inline void note_colors_not_kept(const char* command, const std::string& source,
                                  const std::vector<std::string>& files, const std::string& why) {
   if (files.empty()) return;
   std::string list;
-  for (const std::string& f : files) list += (list.empty() ? "" : ", ") + f;
+  for (const std::string& f : files) list += (list.empty() ? "" : ", ") + io::printable(f);
   std::fprintf(stderr, "knnocc %s: %s: note: the %s's colours are not kept by %s (%s)\n", command,
-               source.c_str(), what, list.c_str(), why.c_str());
+               io::printable(source).c_str(), what, list.c_str(), why.c_str());
 }
 
 /// A ColorOcTree's colours of free voxels, which knnocc does not keep (it colours occupied
@@ -46,7 +46,8 @@ inline void note_free_colors(const char* command, const std::string& path,
   std::fprintf(stderr,
                "knnocc %s: %s: note: the colours of its %llu free voxels are not kept (knnocc "
                "colours occupied voxels only)\n",
-               command, path.c_str(), static_cast<unsigned long long>(tree.free_colored_voxels));
+               command, io::printable(path).c_str(),
+               static_cast<unsigned long long>(tree.free_colored_voxels));
 }
 
 }  // namespace knnocc::cli

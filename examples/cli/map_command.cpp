@@ -155,7 +155,8 @@ CommandSpec make_map_spec() {
         Option::integer("--count", "N", "map N clouds").fallback_text("all the rest").at_least(1),
         Option::text("--init-map", "FILE",
                      "continue this .ot or .bt map (octomap model only): mapping clouds 0..n-1 "
-                     "to a .ot and then --init-map it --first n gives the same map as one run; "
+                     "to a .ot and then --init-map it --first n gives the same occupancy as one "
+                     "run (colours: each voxel's earlier colour counts as one point); "
                      "a .bt holds only occupied/free (clamped values). A k-NN map cannot be "
                      "continued from a file: the tracker's map points are not in it"),
         Option::integer("--save-every", "N",

@@ -357,7 +357,7 @@ int run_map_wide(const MapOptions& opt, const Model& model) {
     std::fprintf(stderr,
                  "knnocc map: %s: note: the clouds have colours; a 21-bit map keeps none (plain "
                  "OcTrees; with 16-bit keys an .ot is a ColorOcTree)\n",
-                 opt.input.c_str());
+                 io::printable(opt.input).c_str());
   const ScanStats& total = totals.scan;
   note_skipped_points(opt.input, total.nonfinite, total.out_of_range,
                       mapper.map().grid().max_coord(), mapper.map().grid().resolution());

@@ -134,13 +134,14 @@ OccupancyMap<OcKey> read_fuse_input(const std::string& in) {
     return map;
   }
   if (!is_tree_file(in)) throw io::Error(in, "not a .bt/.ot map or a tile set folder");
-  io::OctreeColors colors;
-  OccupancyMap<OcKey> map = read_tree_checked(in, {}, &colors);
-  if (!colors.voxels.empty())
+  OccupancyMap<OcKey> map = read_tree_checked(in, {}, nullptr);
+  // The header says it: expanding the colours of every voxel only to print this would cost as
+  // much memory again as the map.
+  if (io::inspect_octree(in).id == "ColorOcTree")
     std::fprintf(stderr,
-                 "knnocc merge: %s: note: its colours are not kept (--fuse adds log-odds; the "
-                 "fused map has no colours)\n",
-                 in.c_str());
+                 "knnocc merge: %s: note: a ColorOcTree, its colours are not kept (--fuse adds "
+                 "log-odds; the fused map has no colours)\n",
+                 io::printable(in).c_str());
   return map;
 }
 
@@ -169,7 +170,7 @@ int fuse(const Args& args, const std::string& out) {
   binary_output(out) ? io::write_bt(out, fused) : io::write_ot(out, fused);
   const auto c = fused.count_voxels();
   std::printf("fused %zu maps voxels %zu occupied %zu free %zu\nwrote %s\n", ins.size(), c.known(),
-              c.occupied, c.free, out.c_str());
+              c.occupied, c.free, io::printable(out).c_str());
   return 0;
 }
 
@@ -212,7 +213,7 @@ int run_merge(const Args& args) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("merged %zu tiles nodes %llu bytes %llu seconds %.3f\nwrote %s\n", st.tiles,
               static_cast<unsigned long long>(st.nodes), static_cast<unsigned long long>(st.bytes),
-              seconds, out.c_str());
+              seconds, io::printable(out).c_str());
   return 0;
 }
 
@@ -225,11 +226,9 @@ int run_tile(const Args& args) {
   check_outputs_not_inputs({{"--out-tiles", dir}}, {{"MAP", in}});
   io::StagingDir::check_target(dir, tiles::is_tile_set);
   use_memory_limit(args);
-  io::OctreeColors colors;
-  const OccupancyMap<OcKey> map = read_tree_checked(in, {}, &colors);
-  if (!colors.voxels.empty())
-    note_colors_not_kept("tile", in, "map", {dir}, "a tile set keeps none");
-  colors = io::OctreeColors{};
+  const OccupancyMap<OcKey> map = read_tree_checked(in, {}, nullptr);
+  if (io::inspect_octree(in).id == "ColorOcTree")  // without expanding every voxel's colour
+    note_colors_not_kept("tile", in, "ColorOcTree", {dir}, "a tile set keeps none");
   const int depth = args.has("--tile-size")
                         ? depth_for_tile_size(args.number("--tile-size"), map.resolution(), 16)
                         : static_cast<int>(args.integer("--tile-depth"));
@@ -253,7 +252,7 @@ int run_tile(const Args& args) {
   std::printf("tiles %zu depth %d edge_m %g occupied %llu free %llu\nwrote %s\n", ix.tiles.size(),
               depth, std::ldexp(map.resolution(), 16 - depth),
               static_cast<unsigned long long>(ix.occupied()),
-              static_cast<unsigned long long>(ix.free()), dir.c_str());
+              static_cast<unsigned long long>(ix.free()), io::printable(dir).c_str());
   return 0;
 }
 

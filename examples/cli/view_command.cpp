@@ -169,7 +169,8 @@ int run_view(const Args& args) {
         {names.empty() ? std::filesystem::path(args.positional()[i]).filename().string() : names[i],
          &maps[i], colors[i].empty() ? nullptr : &colors[i]});
   write_view_page(out, views, up, opt);
-  std::printf("wrote %s (%zu map%s)\n", out.c_str(), maps.size(), maps.size() == 1 ? "" : "s");
+  std::printf("wrote %s (%zu map%s)\n", io::printable(out).c_str(), maps.size(),
+              maps.size() == 1 ? "" : "s");
   return 0;
 }
 

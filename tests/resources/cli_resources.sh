@@ -250,7 +250,13 @@ case "$CASE" in
     mkdir corr && printf '0 0 0 0 0 0 0 1\033[1m\n' > corr/after_000000.txt
     expect 2 "corr/after_000000.txt: line 1: cannot parse '1\\\\x1b\[1m' as a number" \
       "$K" map --input seq --corrections corr --res 0.1
-    ! grep -q $'\033' err.txt || fail "a raw ESC byte on stderr" ;;
+    ! grep -q $'\033' err.txt || fail "a raw ESC byte on stderr"
+    # File names a command prints (wrote lines, notes) are escaped too.
+    printf 'ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n1 0 0 9 9 9\n' > $'c\033[1m.ply'
+    "$K" convert $'c\033[1m.ply' $'o\001.xyz' > out.txt 2> err.txt || fail "convert"
+    grep -q 'wrote o\\x01.xyz' out.txt || fail "the wrote line does not escape the name: $(cat -v out.txt)"
+    grep -q 'c\\x1b\[1m.ply: note' err.txt || fail "the note does not escape the name: $(cat -v err.txt)"
+    ! grep -q $'[\001\033]' out.txt err.txt || fail "a raw control byte reached the terminal" ;;
   corrections_checked)  # snapshots must fit the keyframes: names, duplicates, stamps, rows
     "$K" sim --out seq --seed 3 --keyframes 12 --drift 0.3 > /dev/null || fail "sim"
     snap() { rm -rf c && mkdir c && cp seq/corrections/* c/; }
@@ -350,7 +356,10 @@ case "$CASE" in
     printf 'partial' > a.bt.tmp-Ab12Cd && touch -d '1 minute ago' a.bt.tmp-Ab12Cd
     printf 'partial' > a.bt.tmp-Ef34Gh && touch -d '1 minute ago' a.bt.tmp-Ef34Gh
     exec 9< a.bt.tmp-Ef34Gh && flock -n 9 || fail "flock"  # as a writer at work holds its temporary
-    expect 0 "" "$K" map --input p.xyz --res 0.1 --out-bt a.bt
+    mkfifo a.bt.tmp-Ff1f0X  # a FIFO of that name is not opened (it would wait for a writer)
+    expect 0 "" timeout 20 "$K" map --input p.xyz --res 0.1 --out-bt a.bt
+    [ -p a.bt.tmp-Ff1f0X ] || fail "the FIFO was removed"
+    rm a.bt.tmp-Ff1f0X
     [ ! -e a.bt.tmp-Ab12Cd ] || fail "the stale temporary is still there"
     [ -e a.bt.tmp-Ef34Gh ] || fail "a locked temporary was removed"
     exec 9<&-  # the writer is gone: its temporary is stale
@@ -427,6 +436,8 @@ PY
     [ ! -s out.txt ] || fail "a score was printed: $(cat out.txt)"
     expect 0 "" "$K" eval --heldout seq --folds 2 --model octomap
     expect 2 "seq/poses.txt: is not a folder: a sequence is a folder" "$K" eval --heldout seq/poses.txt
+    "$K" map --input seq --res 0.1 --out-bt m.bt > /dev/null || fail "map"
+    expect 2 "seq/poses.txt: is not a folder: a sequence is a folder" "$K" eval --map m.bt --ids seq/poses.txt
     expect 2 "nope: sequence folder does not exist" "$K" eval --heldout nope ;;
   errors_name_the_file)  # an oversized 2D grid and running out of memory name the file
     printf -- '-3000 -3000 0.5\n3000 3000 0.5\n' > far.xyz
@@ -480,10 +491,12 @@ PY
     kill -KILL $pid; wait $pid
     [ -d "$killed" ] || fail "SIGKILL left no staging folder to clean"
     mkdir big.tmp-Zz99Yy && touch -d '1 minute ago' big.tmp-Zz99Yy  # a user's folder (0755): kept
+    mkdir -m 700 big.tmp-Bk0700 && echo mine > big.tmp-Bk0700/notes.txt  # as mktemp -d makes one:
+    touch -d '1 minute ago' big.tmp-Bk0700                               # kept, no staging marker
     "$K" sim --out big --keyframes 100000 > /dev/null 2>&1 &
     pid=$!
-    for i in $(seq 50); do [ "$(ls -a | grep -c 'big\.tmp-')" = 3 ] && break; sleep 0.1; done
-    live=$(ls -a | grep 'big\.tmp-' | grep -v -e "^$killed\$" -e Zz99Yy) || fail "no live staging folder"
+    for i in $(seq 50); do [ "$(ls -a | grep -c 'big\.tmp-')" = 4 ] && break; sleep 0.1; done
+    live=$(ls -a | grep 'big\.tmp-' | grep -v -e "^$killed\$" -e Zz99Yy -e Bk0700) || fail "no live staging folder"
     sleep 2.2  # older than a second (in whole seconds), but locked
     expect 0 "" "$K" sim --out big --keyframes 3
     [ -f big/poses.txt ] || fail "big/ not written"
@@ -491,8 +504,10 @@ PY
     [ ! -e "$killed" ] || fail "the killed run's staging folder is still there"
     [ -d "$live" ] || fail "a running writer's staging folder was removed"
     [ -d big.tmp-Zz99Yy ] || fail "a user's folder was removed"
+    [ "$(cat big.tmp-Bk0700/notes.txt)" = mine ] || fail "a user's 0700 folder was removed"
+    [ ! -e big/.knnocc-staging ] || fail "the staging marker was committed"
     kill -TERM $pid; wait $pid
-    rmdir big.tmp-Zz99Yy
+    rmdir big.tmp-Zz99Yy && rm -r big.tmp-Bk0700
     no_temporaries ;;
   *) fail "unknown case $CASE" ;;
 esac

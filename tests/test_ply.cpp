@@ -278,7 +278,7 @@ TEST_CASE("io.ply colours of mixed types, and ascii tokens that are no value of 
   const std::string head =
       "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
       "property float z\n";
-  for (const auto& [type, token] :
+  for (const auto& [type_name, token_text] :
        std::vector<std::pair<std::string, std::string>>{{"uchar", "256"},
                                                         {"char", "128"},
                                                         {"ushort", "-1"},
@@ -286,6 +286,9 @@ TEST_CASE("io.ply colours of mixed types, and ascii tokens that are no value of 
                                                         {"short", "40000"},
                                                         {"int", "1.5"},
                                                         {"float", "red"}}) {
+    // Plain variables: doctest's CAPTURE is a lambda, which cannot capture a structured binding
+    // in C++17 (clang refuses it).
+    const std::string type = type_name, token = token_text;
     CAPTURE(type);
     CAPTURE(token);
     const std::string p = dir.file("bad_" + type + ".ply");

@@ -29,6 +29,6 @@ if(TARGET knnocc_tool AND KNNOCC_BASH)
   # allocation failure the limit provokes cannot happen there.
   if(KNNOCC_SANITIZE)
     set_tests_properties(cli.resources.memory_out_of_memory cli.resources.memory_far_rays
-      PROPERTIES ENVIRONMENT "KNNOCC_TOOL_SANITIZED=1")
+      cli.resources.errors_name_the_file PROPERTIES ENVIRONMENT "KNNOCC_TOOL_SANITIZED=1")
   endif()
 endif()

@@ -1,21 +1,12 @@
 # Colour along every path of the tool that can carry it, read back from what was written; and the
-# one note on stderr where a path cannot (issue 51).
+# one note on stderr where a path cannot.
 #   -DTOOL=<path>   the knnocc executable
 #   -DOUT=<dir>     scratch folder (removed first)
 cmake_minimum_required(VERSION 3.16)
 file(REMOVE_RECURSE "${OUT}")
 file(MAKE_DIRECTORY "${OUT}")
 
-# Runs the tool; fails unless it exits 0. Leaves stdout and stderr in _stdout and _stderr.
-function(run_tool)
-  execute_process(COMMAND "${TOOL}" ${ARGN} RESULT_VARIABLE _rc OUTPUT_VARIABLE _o
-                  ERROR_VARIABLE _e)
-  if(NOT _rc EQUAL 0)
-    message(FATAL_ERROR "knnocc ${ARGN}: exit ${_rc}\n${_o}\n${_e}")
-  endif()
-  set(_stdout "${_o}" PARENT_SCOPE)
-  set(_stderr "${_e}" PARENT_SCOPE)
-endfunction()
+include("${CMAKE_CURRENT_LIST_DIR}/RunToolCommon.cmake")
 
 # `text` must hold exactly `n` lines with "note:" and, when n > 0, match `re`.
 function(expect_notes text n re what)

@@ -19,14 +19,7 @@ math(EXPR _random "${_r} % 13 + 1")
 file(REMOVE_RECURSE "${OUT}")
 file(MAKE_DIRECTORY "${OUT}")
 
-function(run_tool)
-  execute_process(COMMAND "${TOOL}" ${ARGN} RESULT_VARIABLE _rc OUTPUT_VARIABLE _o
-                  ERROR_VARIABLE _e)
-  if(NOT _rc EQUAL 0)
-    message(FATAL_ERROR "knnocc ${ARGN}: exit ${_rc}\n${_o}\n${_e}")
-  endif()
-  set(_stdout "${_o}" PARENT_SCOPE)
-endfunction()
+include("${CMAKE_CURRENT_LIST_DIR}/RunToolCommon.cmake")
 
 function(same a b what)
   execute_process(COMMAND "${CMAKE_COMMAND}" -E compare_files "${a}" "${b}" RESULT_VARIABLE _d)

@@ -23,6 +23,20 @@ expect() {
 }
 no_temporaries() { ! ls -a | grep -q '\.tmp-' || fail "temporary left behind: $(ls -a | grep '\.tmp-')"; }
 
+# killed_mid_run SIG RC: a long `sim --out big` gets SIG once its staging folder exists; it must
+# die of the signal (exit RC) leaving neither big/ nor any temporary.
+killed_mid_run() {
+  "$K" sim --out big --keyframes 100000 > /dev/null 2>&1 &
+  local pid=$! rc
+  for i in $(seq 50); do ls -a | grep -q 'big\.tmp-' && break; sleep 0.1; done
+  ls -a | grep -q 'big\.tmp-' || fail "no staging folder seen"
+  sleep 0.5
+  kill -"$1" $pid; wait $pid; rc=$?
+  [ $rc = "$2" ] || fail "exit $rc after SIG$1, expected $2 (killed by the signal)"
+  [ ! -e big ] || fail "big/ exists after SIG$1"
+  no_temporaries
+}
+
 # zeros_pcd [broken]: zeros.pcd, a 4 MB compressed PCD of 33 M points that expands to 400 MB;
 # "broken" turns one reference in the middle into a literal run, so the stream no longer adds up.
 zeros_pcd() {
@@ -102,15 +116,7 @@ case "$CASE" in
     [ -f empty/poses.txt ] && [ -f empty/reference.txt ] || fail "sim did not fill the empty folder"
     no_temporaries ;;
   sigterm_removes_temporaries)  # SIGTERM mid-run: the staging folder is removed, no target made
-    "$K" sim --out big --keyframes 100000 > /dev/null 2>&1 &
-    pid=$!
-    for i in $(seq 50); do ls -a | grep -q 'big\.tmp-' && break; sleep 0.1; done
-    ls -a | grep -q 'big\.tmp-' || fail "no staging folder seen"
-    sleep 0.5
-    kill -TERM $pid; wait $pid; rc=$?
-    [ $rc = 143 ] || fail "exit $rc after SIGTERM, expected 143 (killed by the signal)"
-    [ ! -e big ] || fail "big/ exists after SIGTERM"
-    no_temporaries ;;
+    killed_mid_run TERM 143 ;;
   threads_capped)  # more threads than the machine has: capped with a note, the same map
     "$K" map --input p.xyz --res 0.1 > one.txt || fail "one thread"
     expect 0 "is more than the [0-9]+ hardware threads of this machine; using" \
@@ -474,15 +480,7 @@ PY
     cmp -s m.bt ro.bt || fail "a writable output not replaced"
     no_temporaries ;;
   sigpipe_removes_temporaries)  # SIGPIPE (a closed pipe) mid-run: temporaries removed, as SIGTERM
-    "$K" sim --out big --keyframes 100000 > /dev/null 2>&1 &
-    pid=$!
-    for i in $(seq 50); do ls -a | grep -q 'big\.tmp-' && break; sleep 0.1; done
-    ls -a | grep -q 'big\.tmp-' || fail "no staging folder seen"
-    sleep 0.5
-    kill -PIPE $pid; wait $pid; rc=$?
-    [ $rc = 141 ] || fail "exit $rc after SIGPIPE, expected 141 (killed by the signal)"
-    [ ! -e big ] || fail "big/ exists after SIGPIPE"
-    no_temporaries ;;
+    killed_mid_run PIPE 141 ;;
   stale_staging_folder_removed)  # a SIGKILLed run's staging folder goes at the next start; a live one stays
     "$K" sim --out big --keyframes 100000 > /dev/null 2>&1 &
     pid=$!

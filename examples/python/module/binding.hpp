@@ -62,6 +62,13 @@ std::vector<std::uint64_t> ids_in(py::handle obj, std::size_t n, const char* nam
 /// observations counts per point (core/point_evidence.hpp), each in [0, 2^32 - 1]; ValueError
 /// otherwise.
 std::vector<PointEvidence> evidence_in(py::handle obj, std::size_t n, const char* name);
+/// What a Python object is as an unsigned 64-bit integer: the one test behind ids, memory limits
+/// and pickled counts, each of which words its own error. `bools` says whether True/False count.
+struct U64 {
+  enum Kind { ok, not_integer, negative, too_large } kind = not_integer;
+  std::uint64_t value = 0;
+};
+U64 u64_of(py::handle obj, bool bools);
 /// A non-negative integer (a keyframe id); TypeError or ValueError otherwise.
 std::uint64_t id_in(py::handle obj, const char* name);
 /// A memory limit in bytes (0: no limit): TypeError for a non-integer, ValueError for a negative

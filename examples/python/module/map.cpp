@@ -241,15 +241,11 @@ double state_number(const py::tuple& t, std::size_t i, const char* name) {
 
 // Item `i` of a state, an integer in [0, 2^64).
 std::size_t state_count(const py::tuple& t, std::size_t i, const char* name) {
-  const py::handle v = t[i];
-  if (!py::isinstance<py::int_>(v) || py::isinstance<py::bool_>(v) ||
-      v.cast<py::int_>() < py::int_(0))
+  const U64 v = u64_of(t[i], false);
+  if (v.kind == U64::not_integer || v.kind == U64::negative)
     bad_state(std::string(name) + " must be a non-negative integer");
-  try {
-    return v.cast<std::size_t>();
-  } catch (const py::cast_error&) {
-    bad_state(std::string(name) + " must be below 2**64");
-  }
+  if (v.kind == U64::too_large) bad_state(std::string(name) + " must be below 2**64");
+  return v.value;
 }
 
 MapRef set_state(const py::object& state) {

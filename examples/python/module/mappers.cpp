@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <deque>
-#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -435,12 +434,10 @@ or None (k-NN model: always or never). ValueError for a known id or a bad pose.)
       [](const LiveRef& self, const py::object& id) {
         // Like a set: what cannot be a keyframe id (not an integer, negative, 2**64 or more) is
         // not held.
-        if (!py::isinstance<py::int_>(id) || id.cast<py::int_>() < py::int_(0) ||
-            id.cast<py::int_>() > py::int_(std::numeric_limits<std::uint64_t>::max()))
-          return false;
-        const std::uint64_t i = id_in(id, "keyframe id");
+        const U64 v = u64_of(id, true);
+        if (v.kind != U64::ok) return false;
         const auto lock = self.owner->guard.read("LiveMapper.__contains__");
-        return self.owner->contains(i);
+        return self.owner->contains(v.value);
       },
       py::arg("keyframe_id"), "Whether the keyframe is held.");
   live.def_property_readonly(

@@ -176,28 +176,40 @@ std::vector<std::uint64_t> ids_in(py::handle obj, std::size_t n, const char* nam
   return ids;
 }
 
-std::uint64_t id_in(py::handle obj, const char* name) {
-  if (!py::isinstance<py::int_>(obj))
-    throw py::type_error(std::string(name) + " must be an integer");
-  const auto v = obj.cast<py::int_>();
-  if (v < py::int_(0)) throw py::value_error(std::string(name) + " must not be negative");
-  try {
-    return obj.cast<std::uint64_t>();
-  } catch (const py::cast_error&) {
-    throw py::value_error(std::string(name) + " must be below 2**64");
+U64 u64_of(py::handle obj, bool bools) {
+  U64 r;
+  if (!py::isinstance<py::int_>(obj) || (!bools && py::isinstance<py::bool_>(obj))) return r;
+  int overflow = 0;
+  const long long v = PyLong_AsLongLongAndOverflow(obj.ptr(), &overflow);
+  if (overflow < 0 || (overflow == 0 && v < 0)) {
+    r.kind = U64::negative;
+  } else if (overflow == 0) {
+    r.kind = U64::ok;
+    r.value = static_cast<std::uint64_t>(v);
+  } else {  // beyond long long: uint64 still holds up to 2^64 - 1
+    r.value = PyLong_AsUnsignedLongLong(obj.ptr());
+    r.kind = PyErr_Occurred() ? U64::too_large : U64::ok;
+    PyErr_Clear();
   }
+  return r;
+}
+
+std::uint64_t id_in(py::handle obj, const char* name) {
+  const U64 v = u64_of(obj, true);
+  if (v.kind == U64::not_integer) throw py::type_error(std::string(name) + " must be an integer");
+  if (v.kind == U64::negative) throw py::value_error(std::string(name) + " must not be negative");
+  if (v.kind == U64::too_large) throw py::value_error(std::string(name) + " must be below 2**64");
+  return v.value;
 }
 
 std::size_t memory_limit_in(py::handle obj) {
-  if (!py::isinstance<py::int_>(obj) || py::isinstance<py::bool_>(obj))
+  const U64 v = u64_of(obj, false);
+  if (v.kind == U64::not_integer)
     throw py::type_error("memory_limit must be an integer (bytes; 0: no limit)");
-  if (obj.cast<py::int_>() < py::int_(0))
+  if (v.kind == U64::negative)
     throw py::value_error("memory_limit must not be negative (bytes; 0: no limit)");
-  try {
-    return obj.cast<std::size_t>();
-  } catch (const py::cast_error&) {
-    throw py::value_error("memory_limit must be below 2**64 bytes");
-  }
+  if (v.kind == U64::too_large) throw py::value_error("memory_limit must be below 2**64 bytes");
+  return v.value;
 }
 
 std::string path_in(py::handle obj) {
